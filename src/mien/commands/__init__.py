@@ -1,0 +1,18 @@
+"""The ``mien`` subcommands, one module each.
+
+Each module defines ``register(subparsers)``, which adds its parser and sets ``handler`` (a function taking the
+parsed ``argparse.Namespace`` and returning an exit code). Modules import only argparse at load time; heavy
+imports happen inside the handlers.
+"""
+
+COMMAND_MODULES: tuple[str, ...] = (
+    "demo",
+    "emote",
+    "au",
+    "render",
+    "assets",
+    "track",
+    "learn",
+    "laugh",
+)
+"""Subcommand modules under :mod:`mien.commands`, in ``mien --help`` order."""

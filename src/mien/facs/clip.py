@@ -1,0 +1,127 @@
+"""Clips: a ``(frames, channels)`` array of face states with a frame rate and channel names.
+
+A :class:`Clip` is generic over its channel names: AU clips use :data:`~mien.facs.catalogue.FACE_CHANNELS`,
+blendshape clips use the ARKit names, laughter-controller clips use the controller names.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from mien.errors import InvalidValueError, UnknownNameError
+
+__all__ = ["Clip"]
+
+
+@dataclass(frozen=True, eq=False)
+class Clip:
+    """Sampled curves: ``values[i, j]`` is channel ``channels[j]`` at time ``i / fps`` seconds."""
+
+    values: np.ndarray
+    """(n_frames, n_channels) float64 values (AU intensity 0..5, weight 0..1, degrees...)."""
+    fps: float
+    """Frames per second."""
+    channels: tuple[str, ...]
+    """Channel names, one per column."""
+
+    def __post_init__(self) -> None:
+        values = np.asarray(self.values, dtype=np.float64)
+        if values.ndim != 2 or values.shape[1] != len(self.channels):
+            raise InvalidValueError(
+                "values", f"array of shape {values.shape}", f"(n_frames, {len(self.channels)}) matching channels"
+            )
+        if not np.all(np.isfinite(values)):
+            bad = np.argwhere(~np.isfinite(values))[0]
+            raise InvalidValueError(f"values[{bad[0]}, {self.channels[bad[1]]}]", values[tuple(bad)], "a finite number")
+        fps = float(self.fps)
+        if not math.isfinite(fps) or fps <= 0:
+            raise InvalidValueError("fps", self.fps, "a positive finite number")
+        if len(set(self.channels)) != len(self.channels):
+            raise InvalidValueError("channels", self.channels, "unique names")
+        object.__setattr__(self, "values", values)
+        object.__setattr__(self, "fps", fps)
+        object.__setattr__(self, "channels", tuple(str(c) for c in self.channels))
+
+    @property
+    def n_frames(self) -> int:
+        """Number of frames."""
+        return int(self.values.shape[0])
+
+    @property
+    def duration_s(self) -> float:
+        """Duration in seconds (``n_frames / fps``)."""
+        return self.n_frames / self.fps
+
+    @property
+    def times_s(self) -> np.ndarray:
+        """(n_frames,) time of each frame in seconds."""
+        return np.arange(self.n_frames) / self.fps
+
+    def channel(self, name: str) -> np.ndarray:
+        """(n_frames,) curve of one channel."""
+        try:
+            return self.values[:, self.channels.index(name)]
+        except ValueError:
+            raise UnknownNameError("channel", name, self.channels) from None
+
+    def select(self, names: Sequence[str]) -> Clip:
+        """A clip with only ``names`` (in that order)."""
+        columns = [self.channels.index(n) if n in self.channels else -1 for n in names]
+        missing = [n for n, c in zip(names, columns, strict=True) if c < 0]
+        if missing:
+            raise UnknownNameError("channel", missing[0], self.channels)
+        return Clip(self.values[:, columns], self.fps, tuple(names))
+
+    def active_channels(self, threshold: float = 1e-6) -> tuple[str, ...]:
+        """Names of channels whose absolute value exceeds ``threshold`` somewhere."""
+        mask = np.abs(self.values).max(axis=0, initial=0.0) > threshold
+        return tuple(n for n, m in zip(self.channels, mask, strict=True) if m)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-dict form: ``{"fps", "channels", "values"}`` (values as nested lists)."""
+        return {"fps": self.fps, "channels": list(self.channels), "values": self.values.tolist()}
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> Clip:
+        """Inverse of :meth:`to_dict`; raises :class:`InvalidValueError` on a malformed dict."""
+        if not isinstance(data, dict):
+            raise InvalidValueError("clip", type(data).__name__, "a dict with fps, channels, values")
+        for key in ("fps", "channels", "values"):
+            if key not in data:
+                raise InvalidValueError(key, None, f"a '{key}' entry in the clip dict")
+        values = np.asarray(data["values"], dtype=np.float64)
+        channels = tuple(data["channels"])
+        if values.size == 0:
+            values = values.reshape(0, len(channels))
+        return cls(values, float(data["fps"]), channels)
+
+    def to_json(self) -> str:
+        """JSON text of :meth:`to_dict`."""
+        return json.dumps(self.to_dict())
+
+    @classmethod
+    def from_json(cls, text: str) -> Clip:
+        """Inverse of :meth:`to_json`."""
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise InvalidValueError("clip JSON", text[:40], f"valid JSON ({exc.msg} at {exc.pos})") from None
+        return cls.from_dict(data)
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Clip):
+            return NotImplemented
+        return (
+            self.channels == other.channels
+            and self.fps == other.fps
+            and self.values.shape == other.values.shape
+            and bool(np.array_equal(self.values, other.values))
+        )
+
+    __hash__ = None  # type: ignore[assignment]

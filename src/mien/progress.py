@@ -1,0 +1,28 @@
+"""Progress bars for long work: tqdm when installed, a plain line on stderr otherwise."""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Iterable, Iterator
+from typing import TypeVar
+
+__all__ = ["progress"]
+
+T = TypeVar("T")
+
+
+def progress(items: Iterable[T], total: int | None = None, desc: str = "", enabled: bool = True) -> Iterator[T]:
+    """Yield ``items`` while showing a progress bar on stderr (silent when ``enabled`` is False)."""
+    if not enabled:
+        yield from items
+        return
+    try:
+        from tqdm import tqdm
+    except ImportError:
+        count = 0
+        for count, item in enumerate(items, 1):
+            yield item
+            print(f"\r{desc} {count}/{total or '?'}", end="", file=sys.stderr, flush=True)
+        print(file=sys.stderr)
+        return
+    yield from tqdm(items, total=total, desc=desc, file=sys.stderr, dynamic_ncols=True)
