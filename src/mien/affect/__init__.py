@@ -1,0 +1,1 @@
+"""Emotions (Broekens et al.): events, envelopes, mood, PAD, blends and expression bases."""
