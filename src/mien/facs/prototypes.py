@@ -1,0 +1,48 @@
+"""EMFACS prototypes of the six basic emotions as AU intensities (data in ``data/emfacs_prototypes.csv``)."""
+
+from __future__ import annotations
+
+import csv
+from importlib import resources
+
+import numpy as np
+
+from mien.errors import UnknownNameError
+from mien.facs.catalogue import FACE_CHANNELS, au_channels
+from mien.facs.intensity import parse_au
+
+__all__ = ["EMFACS_PROTOTYPES", "prototype_vector"]
+
+
+def _load() -> dict[str, dict[str, float]]:
+    text = resources.files("mien.facs").joinpath("data/emfacs_prototypes.csv").read_text(encoding="utf-8")
+    rows = csv.DictReader(line for line in text.splitlines() if not line.startswith("#"))
+    table: dict[str, dict[str, float]] = {}
+    for row in rows:
+        entry: dict[str, float] = {}
+        for token in row["aus"].split():
+            spec = parse_au(token)
+            entry[f"AU{spec.code}"] = float(spec.intensity or 0.0)
+        table[row["emotion"]] = entry
+    return table
+
+
+EMFACS_PROTOTYPES: dict[str, dict[str, float]] = _load()
+"""Emotion -> {``"AU6"``: 3.0, ...}: the prototype AUs and their intensities (0..5)."""
+
+
+def prototype_vector(emotion: str) -> np.ndarray:
+    """(62,) face-frame vector (over :data:`~mien.facs.catalogue.FACE_CHANNELS`) of an emotion's prototype.
+
+    >>> v = prototype_vector("surprise")
+    >>> float(v[FACE_CHANNELS.index("AU26")]), float(v[FACE_CHANNELS.index("AU1L")])
+    (3.0, 3.0)
+    """
+    try:
+        aus = EMFACS_PROTOTYPES[emotion]
+    except KeyError:
+        raise UnknownNameError("emotion", emotion, tuple(EMFACS_PROTOTYPES)) from None
+    vector = np.zeros(len(FACE_CHANNELS))
+    for label, value in aus.items():
+        vector[list(au_channels(int(label[2:])))] = value
+    return vector
