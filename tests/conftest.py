@@ -16,6 +16,24 @@ def shared_root() -> Path | None:
     return candidate if candidate.is_dir() else None
 
 
+def _point_assets_at_shared() -> None:
+    """Default the asset variables to the shared folder, as .ci/run does, unless the user set them."""
+    root = shared_root()
+    if root is None:
+        return
+    defaults = {
+        "MIEN_ICT_FACEKIT": root / "assets" / "ict-facekit",
+        "MIEN_FACE_LANDMARKER": root / "models" / "face_landmarker.task",
+        "MIEN_EMOTION_MODEL": root / "models" / "emotion" / "fer_emotion_model_quantized.tflite",
+    }
+    for variable, path in defaults.items():
+        if variable not in os.environ and path.exists():
+            os.environ[variable] = str(path)
+
+
+_point_assets_at_shared()
+
+
 def _shared(relative: str, what: str) -> Path:
     root = shared_root()
     if root is None or not (root / relative).exists():

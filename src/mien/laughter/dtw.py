@@ -34,6 +34,7 @@ import numpy as np
 from mien.errors import InvalidValueError
 
 __all__ = [
+    "as_series",
     "as_series_list",
     "dtw_cross_distance_matrix",
     "dtw_distance",
@@ -105,32 +106,36 @@ def _pair_sq(
         prev2[q] = inf
         prev1[q] = inf
         cur[q] = inf
-    a_base = offset_a
+    # Unsigned indices: numba then emits no negative-index wraparound, so the inner loops vectorise.
+    one = np.uint64(1)
     for d in range(n + m - 1):
         lo = max(0, d - m + 1, (d - wu + 1) // 2)
         hi = min(d, n - 1, (d + wl) // 2)
+        count = np.uint64(hi + 1 - lo)
+        row0 = np.uint64(lo)
+        a0 = np.uint64(offset_a + lo)
         # b[j] with j = d - i is data_rev[m - 1 - j] = data_rev[(m - 1 - d) + i]
-        b_base = offset_b + m - 1 - d
-        for i in range(lo, hi + 1):
-            cost[i] = 0.0
+        b0 = np.uint64(offset_b + m - 1 - d + lo)
+        for t in range(count):
+            cost[row0 + t] = 0.0
         for k in range(k0, k1):
-            row = data[k]
-            row_rev = data_rev[k]
-            for i in range(lo, hi + 1):
-                diff = row[a_base + i] - row_rev[b_base + i]
-                cost[i] += diff * diff
+            channel = np.uint64(k)
+            for t in range(count):
+                diff = data[channel, a0 + t] - data_rev[channel, b0 + t]
+                cost[row0 + t] += diff * diff
         if d == 0:
             cur[1] = cost[0]
         else:
-            for i in range(lo, hi + 1):
+            for t in range(count):
+                i = row0 + t
                 best = prev2[i]
                 up = prev1[i]
-                left = prev1[i + 1]
+                left = prev1[i + one]
                 if up < best:
                     best = up
                 if left < best:
                     best = left
-                cur[i + 1] = cost[i] + best
+                cur[i + one] = cost[i] + best
         cur[lo] = inf
         cur[hi + 2] = inf
         prev2, prev1, cur = prev1, cur, prev2
@@ -227,8 +232,11 @@ def _path_kernel(a: np.ndarray, b: np.ndarray, window: int) -> tuple[np.ndarray,
 # Input handling
 
 
-def _as_series(values: Any, name: str) -> np.ndarray:
-    """One series as a ``(n_frames, n_channels)`` C-contiguous float64 array, validated."""
+def as_series(values: Any, name: str = "series") -> np.ndarray:
+    """One series as a ``(n_frames, n_channels)`` C-contiguous float64 array (1-D input: one channel).
+
+    Raises :class:`InvalidValueError` naming ``name`` on a wrong shape, no frames or a non-finite value.
+    """
     array = np.asarray(values, dtype=np.float64)
     if array.ndim == 1:
         array = array[:, None]
@@ -261,7 +269,7 @@ def as_series_list(series: SeriesInput, name: str = "series") -> list[np.ndarray
         items = list(series)
     if len(items) == 0:
         raise InvalidValueError(name, "0 series", "at least one series")
-    out = [_as_series(item, f"{name}[{index}]") for index, item in enumerate(items)]
+    out = [as_series(item, f"{name}[{index}]") for index, item in enumerate(items)]
     channels = out[0].shape[1]
     for index, item in enumerate(out):
         if item.shape[1] != channels:
@@ -340,7 +348,7 @@ def dtw_distance(a: np.ndarray, b: np.ndarray, window: int | None = None) -> flo
     ``a`` : (n,) or (n, c) float; ``b`` : (m,) or (m, c) float (same ``c``); ``window`` : Sakoe-Chiba band in
     frames (module docstring) or None. Returns the distance in the units of the values.
     """
-    pair = [_as_series(a, "a"), _as_series(b, "b")]
+    pair = [as_series(a, "a"), as_series(b, "b")]
     if pair[0].shape[1] != pair[1].shape[1]:
         raise InvalidValueError("b", f"{pair[1].shape[1]} channels", f"{pair[0].shape[1]} channels like a")
     channels = np.array([[0, pair[0].shape[1]]], dtype=np.int64)
@@ -359,8 +367,8 @@ def dtw_path(a: np.ndarray, b: np.ndarray, window: int | None = None) -> tuple[n
     >>> path.tolist(), distance
     ([[0, 0], [1, 1], [2, 1]], 0.0)
     """
-    first = _as_series(a, "a")
-    second = _as_series(b, "b")
+    first = as_series(a, "a")
+    second = as_series(b, "b")
     if first.shape[1] != second.shape[1]:
         raise InvalidValueError("b", f"{second.shape[1]} channels", f"{first.shape[1]} channels like a")
     path, distance = _path_kernel(first, second, _check_window(window))
@@ -419,8 +427,8 @@ def dtw_cross_distance_matrix(
 
 def dtw_distance_reference(a: np.ndarray, b: np.ndarray, window: int | None = None) -> float:
     """Straightforward full-matrix DTW in numpy/Python (slow; the definition the kernels are tested against)."""
-    first = _as_series(a, "a")
-    second = _as_series(b, "b")
+    first = as_series(a, "a")
+    second = as_series(b, "b")
     n, m = first.shape[0], second.shape[0]
     band = _check_window(window)
     cost = ((first[:, None, :] - second[None, :, :]) ** 2).sum(axis=2)

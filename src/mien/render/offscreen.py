@@ -145,7 +145,10 @@ class OffscreenRenderer:
     """Renders one mesh topology, frame after frame, into (height, width, 3) uint8 sRGB images.
 
     ``faces`` (m, 3) int32 triangles; ``vertex_colors`` (n, 3) linear RGB albedo in 0..1 (None: a skin
-    tone); ``background`` 8-bit sRGB; ``samples`` multisample anti-aliasing (0 = off, 4 = default).
+    tone); ``background`` 8-bit sRGB; ``samples`` multisample anti-aliasing (0 = off, 4 = default; about
+    doubles the cost per frame on llvmpipe); ``cull_back_faces`` skips triangles facing away from the camera
+    (a third faster; right for closed, consistently wound meshes); ``backend`` the moderngl standalone
+    backend (``"egl"``; None = the platform default, see the module doc).
     Buffers are allocated on the first :meth:`render` and rewritten in place afterwards. Use as a context
     manager (or call :meth:`close`) to free the OpenGL context. Not thread-safe: render from one thread.
     """
@@ -159,6 +162,7 @@ class OffscreenRenderer:
         vertex_colors: np.ndarray | None = None,
         background: tuple[int, int, int] = DEFAULT_BACKGROUND,
         samples: int = 4,
+        cull_back_faces: bool = True,
         backend: str | None = "egl",
     ) -> None:
         self.width, self.height = _check_size(width, height)
@@ -177,6 +181,7 @@ class OffscreenRenderer:
         if samples not in (0, 2, 4, 8):
             raise InvalidValueError("samples", samples, "0, 2, 4 or 8 multisamples")
         self.camera = camera
+        self.cull_back_faces = cull_back_faces
         self._n_vertices = 0
         self._normal_sign = 1.0
         self._normals = np.empty((0, 3), np.float32)
@@ -205,6 +210,7 @@ class OffscreenRenderer:
                 self._ctx.framebuffer(color_attachments=[self._ctx.renderbuffer(size, 4)]) if samples else None
             )
             self._index_buffer = self._ctx.buffer(faces.tobytes())
+            self._ctx.enable(self._ctx.DEPTH_TEST)
         self._vao: Any = None
         self.set_camera(camera)
 
@@ -266,11 +272,14 @@ class OffscreenRenderer:
                 outward = float(np.einsum("ij,ij->", normals, vertices - vertices.mean(axis=0)))
                 self._normal_sign = 1.0 if outward >= 0.0 else -1.0
                 self._program["u_normal_sign"].value = self._normal_sign
+                if self.cull_back_faces:
+                    self._ctx.enable(self._ctx.CULL_FACE)
+                    # The y-flipped projection mirrors the winding: outward counter-clockwise faces turn clockwise.
+                    self._ctx.front_face = "cw" if self._normal_sign > 0 else "ccw"
             self._position_buffer.write(vertices)
             self._normal_buffer.write(self._normals)
             ctx = self._ctx
             self._fbo.use()
-            ctx.enable(ctx.DEPTH_TEST)
             ctx.clear(*(c / 255.0 for c in self.background), 1.0)
             self._vao.render()
             source = self._fbo

@@ -4,7 +4,7 @@ Lighting (directions in eye space, pointing toward the light; the camera looks a
 
 - key: from the viewer's upper left, warm, Lambert + a little Blinn-Phong specular (skin sheen);
 - fill: from the viewer's right and slightly below, cool and weak, so shadowed creases keep their shape;
-- rim: a Fresnel-like edge term strongest where the light from behind grazes the silhouette;
+- rim: a Fresnel-like edge term (tinted by the albedo) strongest where light from behind grazes the silhouette;
 - a hemispherical ambient (brighter from above) so nothing is pitch black.
 
 Albedo is linear RGB; the output is sRGB-encoded (gamma 2.2) 8-bit colour.
@@ -63,8 +63,8 @@ void main() {
     vec3 ambient = mix(vec3(0.05, 0.05, 0.06), vec3(0.16, 0.16, 0.17), 0.5 + 0.5 * n.y);
     vec3 half_vector = normalize(u_key_direction + to_eye);
     float specular = key > 0.0 ? 0.12 * pow(max(dot(n, half_vector), 0.0), 36.0) : 0.0;
-    vec3 linear = v_color * (u_key_color * key + u_fill_color * fill + ambient)
-        + u_rim_color * rim * 0.6 + u_key_color * specular;
+    vec3 linear = v_color * (u_key_color * key + u_fill_color * fill + ambient + u_rim_color * rim)
+        + u_key_color * specular;
     f_color = vec4(pow(clamp(linear, 0.0, 1.0), vec3(1.0 / 2.2)), 1.0);
 }
 """

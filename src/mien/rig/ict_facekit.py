@@ -182,7 +182,7 @@ def ict_missing_files(path: str | os.PathLike[str] | None = None) -> list[str]:
 def _check_folder(folder: Path) -> Path:
     missing = ict_missing_files(folder)
     if missing:
-        shown = ", ".join(missing[:12]) + (f" and {len(missing) - 12} more" if len(missing) > 12 else "")
+        shown = ", ".join(missing)
         raise MissingAssetError(
             f"ICT-FaceKit folder {folder} is incomplete: missing {len(missing)} of {len(_REQUIRED_FILES)} files "
             f"({shown}). Point MIEN_ICT_FACEKIT at a full checkout of https://github.com/ICT-VGL/ICT-FaceKit "

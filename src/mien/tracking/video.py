@@ -134,23 +134,26 @@ def _iter_av(file: Path) -> Iterator[tuple[float, np.ndarray]]:
     declared = int(stream.frames or 0)
     start: float | None = None
     index = 0
+    packets = 0
     try:
         try:
-            for frame in container.decode(stream):
-                time_s = frame.time
-                if time_s is None:
-                    time_s = index / rate
-                if start is None:
-                    start = time_s
-                # rgb24 straight from the decoder's reformatter: one conversion, no extra copy.
-                yield time_s - start, frame.to_ndarray(format="rgb24")
-                index += 1
+            for packet in container.demux(stream):
+                packets += packet.size > 0
+                for frame in packet.decode():
+                    time_s = frame.time
+                    if time_s is None:
+                        time_s = index / rate
+                    if start is None:
+                        start = time_s
+                    # rgb24 straight from the decoder's reformatter: one conversion, no extra copy.
+                    yield time_s - start, frame.to_ndarray(format="rgb24")
+                    index += 1
         except av.FFmpegError as exc:
             raise _unreadable(file, f"decoding failed after {index} frames: {exc}") from None
-        # FFmpeg stops quietly at the end of a truncated file: compare with the count the container declares
-        # (allowing the usual off-by-a-few of edit lists).
-        if declared and index > 0 and index < declared - max(2, declared // 100):
-            raise _unreadable(file, f"truncated: only {index} of the {declared} declared frames could be decoded")
+        # FFmpeg stops quietly at the end of a truncated file: compare the packets read with the count the
+        # container declares (decoded frames may be fewer than packets because of edit lists).
+        if declared and packets < declared - 1:
+            raise _unreadable(file, f"truncated: only {packets} of the {declared} declared frames are present")
     finally:
         container.close()
 
