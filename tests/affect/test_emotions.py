@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Iterator
+from typing import Any
 
 import numpy as np
 import pytest
@@ -62,7 +63,8 @@ def test_unknown_name_lists_known_names_including_blends() -> None:
     assert "melancholic" in message and "joy" in message and "evil" in message and "furious" in message
     assert "frustrated" in info.value.known
     with pytest.raises(UnknownNameError):
-        resolve_emotion(3)
+        not_a_name: Any = 3
+        resolve_emotion(not_a_name)
     with pytest.raises(UnknownNameError):
         emotion_index("evil")  # a blend has no single index
 
@@ -84,7 +86,8 @@ def test_paper_blends_are_equal_shares_at_full_intensity() -> None:
 def test_emotion_vector_and_intensity_checks() -> None:
     assert emotion_vector("fear", 2.4).tolist() == [0.0, 0.0, 0.0, 0.0, 0.0, 2.4]
     assert emotion_vector("joy").tolist() == [1.0, 0.0, 0.0, 0.0, 0.0, 0.0]
-    for bad in (-0.1, 5.01, float("nan"), float("inf"), "lots"):
+    bad_values: tuple[Any, ...] = (-0.1, 5.01, float("nan"), float("inf"), "lots")
+    for bad in bad_values:
         with pytest.raises(InvalidValueError) as info:
             emotion_vector("joy", bad)
         assert info.value.field == "intensity"

@@ -9,7 +9,7 @@ import pytest
 
 from mien.affect.basis import expression, facs_basis, feature_point_basis, feature_target_names
 from mien.affect.emotions import EMOTIONS, define_blend, emotion_vector, remove_blend
-from mien.affect.engine import EmotionEngine
+from mien.affect.engine import EmotionEngine, mood_step, shown_mood
 from mien.affect.envelope import Envelope, envelope_values
 from mien.affect.pad import PAD_PROTOTYPES, pad_to_emotions
 from mien.errors import InvalidValueError, UnknownNameError
@@ -135,7 +135,7 @@ def test_earlier_queries_do_not_rewind_the_mood() -> None:
 def test_pad_mode() -> None:
     engine = EmotionEngine(mode="pad")
     anger = PAD_PROTOTYPES[ANGER]
-    engine.set_pad(*anger, t_s=0.0)
+    engine.set_pad(float(anger[0]), float(anger[1]), float(anger[2]), t_s=0.0)
     np.testing.assert_allclose(engine.pad(0.2), 0.5 * anger)
     np.testing.assert_allclose(engine.intensities(0.2), pad_to_emotions(0.5 * anger))
     np.testing.assert_allclose(engine.intensities(1.0), pad_to_emotions(anger))
@@ -146,6 +146,9 @@ def test_pad_mode() -> None:
     run(engine, 8.0, start_s=6.0)
     emotion, mood = engine.state(8.0)
     assert emotion.tolist() == [0.0] * 6 and mood[ANGER] > 0.0
+    instant = EmotionEngine(mode="pad", envelope=Envelope(0.0, 0.3, 0.3))
+    instant.set_pad(0.5, 0.5, 0.5, 1.0)
+    assert instant.pad(0.5).tolist() == [0.0, 0.0, 0.0] and instant.pad(1.0).tolist() == [0.5, 0.5, 0.5]
     with pytest.raises(InvalidValueError) as info:
         engine.set_pad(0.0, 1.2, 0.0, 9.0)
     assert (info.value.field, info.value.value) == ("arousal", 1.2)
@@ -180,3 +183,19 @@ def test_bad_input_names_the_field(call: object, field: str) -> None:
 def test_unknown_emotion() -> None:
     with pytest.raises(UnknownNameError):
         EmotionEngine().trigger("smugness", 1.0, 0.0)
+
+
+def test_vectorised_helpers_match_the_engine() -> None:
+    engine = EmotionEngine(mood_time_constant_s=3.0, mood_gain=0.8)
+    engine.trigger("furious", 1.2, 0.1)
+    engine.trigger("sad", 0.7, 0.5)
+    mood = np.zeros((2, 6))  # a batch of two identical characters
+    previous = np.zeros((2, 6))
+    for i in range(1, 121):
+        t = i / 60.0
+        current = np.tile(engine.intensities(t), (2, 1))
+        mood_step(mood, previous, current, 1 / 60.0, 3.0, 0.8)
+        previous = current
+        _, shown = engine.expressed(t)
+        np.testing.assert_allclose(mood[1], engine.mood(t), rtol=1e-9, atol=1e-15)
+        np.testing.assert_allclose(shown_mood(current, mood)[0], shown, rtol=1e-9, atol=1e-15)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -40,7 +42,7 @@ def test_zero_phases_and_longer_envelopes() -> None:
         ({"onset_s": 0.0, "hold_s": 0.0, "decay_s": 0.0}, "onset_s + hold_s + decay_s"),
     ],
 )
-def test_validation(kwargs: dict[str, object], field: str) -> None:
+def test_validation(kwargs: dict[str, Any], field: str) -> None:
     with pytest.raises(InvalidValueError) as info:
         Envelope(**kwargs)
     assert info.value.field == field

@@ -25,7 +25,7 @@ def head_mesh(n_lat: int = 40, n_lon: int = 64) -> tuple[np.ndarray, np.ndarray]
     radii = np.array([0.075, 0.11, 0.095])
     # A nose: push the front of the ellipsoid (around +z, just below the equator) forward by up to 3 cm.
     nose_axis = np.array([0.0, -0.15, 1.0]) / np.linalg.norm([0.0, -0.15, 1.0])
-    bump = 0.03 * np.exp(-((1.0 - unit @ nose_axis) / 0.02) ** 2)
+    bump = 0.03 * np.exp(-(((1.0 - unit @ nose_axis) / 0.02) ** 2))
     points = unit * radii + bump[..., None] * nose_axis + np.array([0.0, -0.03, -0.06])
     vertices = points.reshape(-1, 3).astype(np.float32)
     faces = []

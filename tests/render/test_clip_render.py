@@ -118,8 +118,8 @@ def test_ict_head_renders_with_eyes_and_lips(ict_dir: Path) -> None:
     assert (columns[0] + columns[-1]) / 2 == pytest.approx(128, abs=4)
     # The pupils are dark, straight ahead of each eye centre.
     for center in rig.eye_centers:
-        x, y = camera.project(center + np.float32([0, 0, 0.02]), 256, 256)[0]
-        assert image[int(round(y)) - 1 : int(round(y)) + 2, int(round(x)) - 1 : int(round(x)) + 2].min() < 60
+        x, y = np.rint(camera.project(center + np.float32([0, 0, 0.02]), 256, 256)[0]).astype(int)
+        assert image[y - 1 : y + 2, x - 1 : x + 2].min() < 60
     # The lips are redder than the cheeks.
     lip_x, lip_y = camera.project(rig.neutral[rig.landmarks[51]], 256, 256)[0]
     lip = image[int(lip_y) + 2, int(lip_x)].astype(int)

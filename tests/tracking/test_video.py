@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import shutil
 from pathlib import Path
 
 import numpy as np
@@ -37,9 +36,9 @@ def test_mov_files_decode(shared_data: Path, name: str) -> None:
 def test_garbage_bytes_name_the_file(tmp_path: Path) -> None:
     bad = tmp_path / "garbage.mp4"
     bad.write_bytes(bytes(range(256)) * 40)
-    with pytest.raises(InvalidValueError, match="garbage.mp4"):
+    with pytest.raises(InvalidValueError, match=r"garbage\.mp4"):
         list(iter_frames(bad))
-    with pytest.raises(InvalidValueError, match="garbage.mp4"):
+    with pytest.raises(InvalidValueError, match=r"garbage\.mp4"):
         probe(bad)
 
 
@@ -48,7 +47,7 @@ def test_empty_and_missing_files(tmp_path: Path) -> None:
     empty.touch()
     with pytest.raises(InvalidValueError, match="empty"):
         probe(empty)
-    with pytest.raises(InvalidValueError, match="missing.mp4"):
+    with pytest.raises(InvalidValueError, match=r"missing\.mp4"):
         list(iter_frames(tmp_path / "missing.mp4"))
 
 
@@ -57,21 +56,26 @@ def test_truncated_copy_is_rejected(single_face_video: Path, tmp_path: Path) -> 
     data = single_face_video.read_bytes()
     cut = tmp_path / "cut.mp4"
     cut.write_bytes(data[: len(data) // 2])
-    with pytest.raises(InvalidValueError, match="cut.mp4"):
+    with pytest.raises(InvalidValueError, match=r"cut\.mp4"):
         list(iter_frames(cut))
 
 
-def test_truncated_faststart_copy_is_rejected(single_face_video: Path, tmp_path: Path) -> None:
-    """With the index first, FFmpeg decodes a truncated file quietly; the missing frames are still noticed."""
+def _remux(source_path: Path, target: Path, options: dict[str, str]) -> None:
+    """Copy the video stream into another container without re-encoding."""
     import av
 
-    faststart = tmp_path / "faststart.mp4"
-    with av.open(str(single_face_video)) as source, av.open(str(faststart), "w", options={"movflags": "faststart"}) as out:
+    with av.open(str(source_path)) as source, av.open(str(target), "w", options=options) as out:
         stream = out.add_stream_from_template(source.streams.video[0])
         for packet in source.demux(source.streams.video[0]):
             if packet.dts is not None:
                 packet.stream = stream
                 out.mux(packet)
+
+
+def test_truncated_faststart_copy_is_rejected(single_face_video: Path, tmp_path: Path) -> None:
+    """With the index first, FFmpeg decodes a truncated file quietly; the missing frames are still noticed."""
+    faststart = tmp_path / "faststart.mp4"
+    _remux(single_face_video, faststart, {"movflags": "faststart"})
     assert sum(1 for _ in iter_frames(faststart)) == 72
     truncated = tmp_path / "truncated.mp4"
     data = faststart.read_bytes()
@@ -82,19 +86,11 @@ def test_truncated_faststart_copy_is_rejected(single_face_video: Path, tmp_path:
 
 def test_other_containers(single_face_video: Path, tmp_path: Path) -> None:
     """The same stream remuxed to .mkv decodes the same frames."""
-    import av
-
     mkv = tmp_path / "clip.mkv"
-    with av.open(str(single_face_video)) as source, av.open(str(mkv), "w") as out:
-        stream = out.add_stream_from_template(source.streams.video[0])
-        for packet in source.demux(source.streams.video[0]):
-            if packet.dts is not None:
-                packet.stream = stream
-                out.mux(packet)
+    _remux(single_face_video, mkv, {})
     first_mp4 = next(iter(iter_frames(single_face_video)))[1]
     first_mkv = next(iter(iter_frames(mkv)))[1]
     assert np.array_equal(first_mp4, first_mkv)
-    shutil.rmtree(tmp_path, ignore_errors=True)
 
 
 def test_prefetch_keeps_order_and_reraises() -> None:

@@ -133,6 +133,19 @@ def _resolve_basic(name: object) -> str:
     return key
 
 
+_PAPER = BLEND_COMPONENT_WEIGHT
+BLENDS: dict[str, Blend] = {
+    # Broekens, Qu & Brinkman, section 3: the four blends of the study.
+    "enthusiastic": Blend("enthusiastic", (("joy", _PAPER), ("surprise", _PAPER))),
+    "furious": Blend("furious", (("anger", _PAPER), ("surprise", _PAPER))),
+    "frustrated": Blend("frustrated", (("anger", _PAPER), ("sadness", _PAPER))),
+    "evil": Blend("evil", (("joy", _PAPER), ("anger", _PAPER))),
+}
+"""The paper's blends by name (read-only by convention; add your own with :func:`define_blend`)."""
+
+_USER_BLENDS: dict[str, Blend] = {}
+
+
 def known_names() -> tuple[str, ...]:
     """Every name :func:`resolve_emotion` accepts: emotions, blends (built-in, then user), then aliases."""
     return EMOTIONS + tuple(BLENDS) + tuple(_USER_BLENDS) + tuple(EMOTION_ALIASES)
@@ -215,19 +228,6 @@ def remove_blend(name: str) -> None:
     if key not in _USER_BLENDS:
         raise UnknownNameError("user blend", name, tuple(_USER_BLENDS))
     del _USER_BLENDS[key]
-
-
-_PAPER = BLEND_COMPONENT_WEIGHT
-BLENDS: dict[str, Blend] = {
-    # Broekens, Qu & Brinkman, section 3: the four blends of the study.
-    "enthusiastic": Blend("enthusiastic", (("joy", _PAPER), ("surprise", _PAPER))),
-    "furious": Blend("furious", (("anger", _PAPER), ("surprise", _PAPER))),
-    "frustrated": Blend("frustrated", (("anger", _PAPER), ("sadness", _PAPER))),
-    "evil": Blend("evil", (("joy", _PAPER), ("anger", _PAPER))),
-}
-"""The paper's blends by name (read-only by convention; add your own with :func:`define_blend`)."""
-
-_USER_BLENDS: dict[str, Blend] = {}
 
 
 def emotion_vector(name_or_blend: str | Blend, intensity: float = 1.0) -> np.ndarray:

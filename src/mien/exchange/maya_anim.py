@@ -449,6 +449,6 @@ def to_clip(anim: AnimFile, fps: float | None = None) -> Clip:
         raise InvalidValueError("anim", "no curves", "a file with at least one animated curve")
     duration_s = (anim.end_frame - anim.start_frame) / anim.fps
     n_frames = int(math.floor(duration_s * rate + 1e-9)) + 1
-    frames = anim.start_frame + np.arange(n_frames) / rate * anim.fps
+    frames = anim.start_frame + np.arange(n_frames) * (anim.fps / rate)
     values = np.stack([evaluate_curve(c, frames, anim.fps) for c in anim.curves.values()], axis=1)
     return Clip(values, rate, tuple(anim.curves))

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
@@ -160,5 +161,10 @@ def camera_from_options(
     """
     if preset not in CAMERA_PRESETS:
         raise UnknownNameError("camera preset", preset, tuple(CAMERA_PRESETS))
-    overrides = {"yaw_deg": yaw_deg, "pitch_deg": pitch_deg, "distance_m": distance_m, "fov_deg": fov_deg}
+    overrides: dict[str, Any] = {
+        "yaw_deg": yaw_deg,
+        "pitch_deg": pitch_deg,
+        "distance_m": distance_m,
+        "fov_deg": fov_deg,
+    }
     return replace(CAMERA_PRESETS[preset], **{k: v for k, v in overrides.items() if v is not None})

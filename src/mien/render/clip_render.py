@@ -24,7 +24,7 @@ from mien.render.video import write_mp4, write_png
 from mien.rig.deform import Deformer
 from mien.rig.model import Rig
 
-__all__ = ["POSE_COLUMNS", "iter_frames", "render_clip", "render_still"]
+__all__ = ["POSE_COLUMNS", "iter_frames", "make_renderer", "render_clip", "render_still"]
 
 POSE_COLUMNS = ("head_yaw_deg", "head_pitch_deg", "head_roll_deg", "gaze_yaw_deg", "gaze_pitch_deg")
 """Columns of a ``poses`` array, degrees (signs as in the face frame: yaw > 0 to the character's left)."""
@@ -91,10 +91,23 @@ def iter_frames(
         yield renderer.render(deformed)
 
 
-def _renderer(rig: Rig, camera: Camera, size: tuple[int, int], background: tuple[int, int, int]) -> OffscreenRenderer:
+def make_renderer(
+    rig: Rig,
+    camera: Camera,
+    size: tuple[int, int] = (512, 512),
+    background: tuple[int, int, int] = DEFAULT_BACKGROUND,
+    samples: int = 4,
+) -> OffscreenRenderer:
+    """An :class:`OffscreenRenderer` for ``rig``: its visible faces and region colours, ``size`` (w, h) pixels."""
     width, height = _check_size(size)
     return OffscreenRenderer(
-        visible_faces(rig), width, height, camera, vertex_colors=rig_vertex_colors(rig), background=background
+        visible_faces(rig),
+        width,
+        height,
+        camera,
+        vertex_colors=rig_vertex_colors(rig),
+        background=background,
+        samples=samples,
     )
 
 
@@ -105,15 +118,17 @@ def render_still(
     size: tuple[int, int] = (512, 512),
     pose: np.ndarray | None = None,
     background: tuple[int, int, int] = DEFAULT_BACKGROUND,
+    samples: int = 4,
 ) -> np.ndarray:
     """One (height, width, 3) uint8 image of ``rig`` at ``weights`` ((n_targets,), None = neutral).
 
-    ``size`` is (width, height) in pixels; ``pose`` (5,) degrees (see :data:`POSE_COLUMNS`) or None.
+    ``size`` is (width, height) in pixels; ``pose`` (5,) degrees (see :data:`POSE_COLUMNS`) or None;
+    ``samples`` multisample anti-aliasing (0 = off).
     """
     w = _check_weights(rig, weights, 1)
     if len(w) != 1:
         raise InvalidValueError("weights", w.shape, f"({len(rig.targets)},) weights of one frame")
-    with _renderer(rig, camera, size, background) as renderer:
+    with make_renderer(rig, camera, size, background, samples) as renderer:
         return next(iter_frames(rig, w, renderer, None if pose is None else np.asarray(pose)[None]))
 
 
@@ -146,6 +161,7 @@ def render_clip(
     crf: int = 20,
     preset: str = "veryfast",
     background: tuple[int, int, int] = DEFAULT_BACKGROUND,
+    samples: int = 4,
 ) -> Path:
     """Render ``weights`` ((n_frames, n_targets), 0..1) of ``rig`` through ``camera``; returns the output path.
 
@@ -153,6 +169,7 @@ def render_clip(
     :func:`~mien.render.video.write_mp4`; a failure midway keeps ``<stem>.partial.mp4``); a path without a
     suffix, or an existing folder, gets ``frame_000000.png``, ... ``size`` is (width, height) in pixels
     (even for MP4). ``poses`` (n_frames, 5) degrees: head yaw/pitch/roll, gaze yaw/pitch, or None.
+    ``samples`` multisample anti-aliasing (0 = off, about twice as fast on a CPU).
     """
     out = Path(out_path)
     w = _check_weights(rig, weights, None)
@@ -163,7 +180,7 @@ def render_clip(
         raise InvalidValueError("fps", fps, "frames per second > 0")
     if not _is_frame_folder(out) and any(int(side) % 2 for side in size):
         raise InvalidValueError("size", size, "an even width and height for H.264 (yuv420p)")
-    with _renderer(rig, camera, size, background) as renderer:
+    with make_renderer(rig, camera, size, background, samples) as renderer:
         frames = progress_bar(
             iter_frames(rig, w, renderer, poses), total=len(w), desc=f"rendering {out.name}", enabled=progress
         )

@@ -119,7 +119,7 @@ class Mp4Writer:
             if self._error is not None:
                 continue  # drain the queue so the producer never blocks
             try:
-                stdin.write(memoryview(frame).cast("B"))
+                stdin.write(frame.data.cast("B"))
             except BaseException as error:  # ffmpeg died (BrokenPipe) or similar: report to the producer
                 self._error = error
 

@@ -31,7 +31,12 @@ __all__ = [
     "TONGUE",
     "HeadMesh",
     "HeadShape",
+    "brow_line",
     "build_head_mesh",
+    "gauss",
+    "lid_heights",
+    "skin_masks",
+    "smoothstep",
     "srgb_to_linear",
 ]
 
@@ -144,12 +149,14 @@ def srgb_to_linear(rgb: np.ndarray | tuple[float, float, float]) -> np.ndarray:
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
 
 
-def _smoothstep(edge0: float, edge1: float, x: np.ndarray) -> np.ndarray:
+def smoothstep(edge0: float, edge1: float, x: np.ndarray) -> np.ndarray:
+    """Hermite ramp: 0 at ``edge0``, 1 at ``edge1`` (either order), smooth in between."""
     t = np.clip((x - edge0) / (edge1 - edge0), 0.0, 1.0)
     return t * t * (3.0 - 2.0 * t)
 
 
-def _gauss(x: np.ndarray, y: np.ndarray, cx: float, cy: float, sx: float, sy: float) -> np.ndarray:
+def gauss(x: np.ndarray, y: np.ndarray, cx: float, cy: float, sx: float, sy: float) -> np.ndarray:
+    """Axis-aligned 2-D Gaussian bump of height 1 at (cx, cy) with standard deviations (sx, sy)."""
     return np.exp(-0.5 * (((x - cx) / sx) ** 2 + ((y - cy) / sy) ** 2))
 
 
@@ -218,39 +225,39 @@ def _relief(x: np.ndarray, yd: np.ndarray, shape: HeadShape) -> np.ndarray:
     """Forward depth offset (m) of the facial relief at frontal design position (x, yd)."""
     ax = np.abs(x)
     ym = Y_MOUTH_D
-    z = 0.004 * _gauss(ax, yd, 0.029, 0.021, 0.020, 0.007)  # brow ridge
-    z += 0.002 * _gauss(x, yd, 0.0, 0.016, 0.010, 0.010)  # glabella
-    z += 0.006 * _gauss(ax, yd, 0.040, -0.032, 0.014, 0.015)  # cheekbones
-    z -= 0.003 * _gauss(ax, yd, 0.052, -0.002, 0.010, 0.014)  # temples / outer orbit
+    z = 0.004 * gauss(ax, yd, 0.029, 0.021, 0.020, 0.007)  # brow ridge
+    z += 0.002 * gauss(x, yd, 0.0, 0.016, 0.010, 0.010)  # glabella
+    z += 0.006 * gauss(ax, yd, 0.040, -0.032, 0.014, 0.015)  # cheekbones
+    z -= 0.003 * gauss(ax, yd, 0.052, -0.002, 0.010, 0.014)  # temples / outer orbit
     # nose: a ridge whose height and width follow the profile keyframes, plus the alae
-    prof_y = np.array([-0.052, -0.048, -0.044, -0.040, -0.035, -0.025, -0.010, 0.004, 0.014])
-    prof_h = np.array([0.000, 0.010, 0.019, 0.025, 0.026, 0.019, 0.0095, 0.003, 0.000])
+    prof_y = np.array([-0.054, -0.050, -0.045, -0.040, -0.035, -0.025, -0.010, 0.004, 0.014])
+    prof_h = np.array([0.000, 0.008, 0.018, 0.025, 0.026, 0.019, 0.0095, 0.003, 0.000])
     wid_y = np.array([-0.050, -0.036, -0.020, 0.004])
     wid_s = np.array([0.0085, 0.0080, 0.0058, 0.0046])
     height = _pchip(prof_y, prof_h, yd) * shape.nose_scale
     width = _pchip(wid_y, wid_s, yd) * shape.nose_width_scale
     z += height * np.exp(-0.5 * (x / width) ** 2)
-    z += 0.010 * shape.nose_scale * _gauss(ax, yd, 0.0135 * shape.nose_width_scale, -0.041, 0.0050, 0.0048)
+    z += 0.010 * shape.nose_scale * gauss(ax, yd, 0.0135 * shape.nose_width_scale, -0.041, 0.0050, 0.0048)
     # muzzle: the mouth region stands forward of the cheeks
-    z += 0.007 * _gauss(x, yd, 0.0, ym, 0.026, 0.022)
+    z += 0.007 * gauss(x, yd, 0.0, ym, 0.026, 0.022)
     # lips: vermilion bulges above and below the slit, recessed at the slit itself
     mw = shape.mouth_half_width_m
     across = np.clip(1.0 - (x / mw) ** 2, 0.0, 1.0)
-    up_h = (0.0075 + 0.0012 * _gauss(ax, yd, 0.006, 0.0, 0.004, 1.0)) * shape.lip_fullness * np.sqrt(across)
+    up_h = (0.0075 + 0.0012 * gauss(ax, yd, 0.006, 0.0, 0.004, 1.0)) * shape.lip_fullness * np.sqrt(across)
     lo_h = 0.0095 * shape.lip_fullness * np.sqrt(across)
     t_up = np.clip((yd - ym) / np.maximum(up_h, 1e-4), 0.0, 1.0)
     t_lo = np.clip((ym - yd) / np.maximum(lo_h, 1e-4), 0.0, 1.0)
     up = (yd >= ym) * np.sin(np.pi * (0.35 + 0.65 * t_up)) ** 0.8 * np.where(t_up < 1.0, 1.0, 0.0)
     lo = (yd < ym) * np.sin(np.pi * (0.35 + 0.65 * t_lo)) ** 0.8 * np.where(t_lo < 1.0, 1.0, 0.0)
     z += 0.0040 * shape.lip_fullness * up * across**0.5 + 0.0048 * shape.lip_fullness * lo * across**0.5
-    z -= 0.0020 * _gauss(ax, yd, mw, ym, 0.0030, 0.0030)  # corner crease
-    z += 0.0012 * _gauss(x, yd, 0.0, ym + 0.013, 0.005, 0.005) - 0.0008 * _gauss(x, yd, 0.0, ym + 0.013, 0.0018, 0.01)
-    z -= 0.0030 * _gauss(x, yd, 0.0, -0.091, 0.016, 0.005)  # mentolabial sulcus
-    z += 0.0065 * shape.chin_scale * _gauss(x, yd, 0.0, -0.108, 0.014, 0.009)  # chin
+    z -= 0.0020 * gauss(ax, yd, mw, ym, 0.0030, 0.0030)  # corner crease
+    z += 0.0012 * gauss(x, yd, 0.0, ym + 0.013, 0.005, 0.005) - 0.0008 * gauss(x, yd, 0.0, ym + 0.013, 0.0018, 0.01)
+    z -= 0.0030 * gauss(x, yd, 0.0, -0.091, 0.016, 0.005)  # mentolabial sulcus
+    z += 0.0065 * shape.chin_scale * gauss(x, yd, 0.0, -0.108, 0.014, 0.009)  # chin
     return np.asarray(z)
 
 
-def _lid_heights(t: np.ndarray, shape: HeadShape) -> tuple[np.ndarray, np.ndarray]:
+def lid_heights(t: np.ndarray, shape: HeadShape) -> tuple[np.ndarray, np.ndarray]:
     """Upper and lower lid margin heights (m) above / below the eye slit at relative position t in -1..1."""
     inside = np.clip(1.0 - t**2, 0.0, 1.0)
     scale = shape.eye_radius_m / 0.012
@@ -318,7 +325,7 @@ def build_head_mesh(shape: HeadShape) -> HeadMesh:
     x = half_w[:, None] * sin_u[None, :]
     z = Z_CENTRE + np.where(cos_u > 0, front[:, None], back[:, None]) * cos_u[None, :]
     yd = np.broadcast_to(yd_rows[:, None], (n_r, n_c)).copy()
-    front_mask = _smoothstep(0.15, 0.55, np.broadcast_to(cos_u[None, :], (n_r, n_c)))
+    front_mask = smoothstep(0.15, 0.55, np.broadcast_to(cos_u[None, :], (n_r, n_c)))
 
     i_eye = int(np.argmin(np.abs(yd_rows)))
     i_mouth = int(np.argmin(np.abs(yd_rows - Y_MOUTH_D)))
@@ -331,7 +338,7 @@ def build_head_mesh(shape: HeadShape) -> HeadMesh:
     dy = np.zeros((n_r, n_c))
     for c in centers:
         t = np.clip((x - c[0]) / shape.eye_half_width_m, -1.0, 1.0)
-        h_up, h_lo = _lid_heights(t, shape)
+        h_up, h_lo = lid_heights(t, shape)
         reach = 0.015
         r_up = np.clip(yd / reach, 0.0, 1.0)
         r_lo = np.clip(-yd / reach, 0.0, 1.0)
@@ -357,7 +364,7 @@ def build_head_mesh(shape: HeadShape) -> HeadMesh:
     lower_eye: list[np.ndarray] = []
     for c, cols in zip(centers, eye_cols, strict=True):
         t = np.clip((x[i_eye, cols] - c[0]) / shape.eye_half_width_m, -1.0, 1.0)
-        h_up, h_lo = _lid_heights(t, shape)
+        h_up, h_lo = lid_heights(t, shape)
         low = skin[i_eye, cols].copy()
         low[:, 1] -= h_up + h_lo
         ids = np.arange(n, n + len(cols))
@@ -379,7 +386,7 @@ def build_head_mesh(shape: HeadShape) -> HeadMesh:
         d = all_v - c
         d_ell = np.sqrt((d[:, 0] / 1.12) ** 2 + d[:, 1] ** 2)
         front_v = all_v[:, 2] > -0.02
-        socket = 0.008 * (1.0 - _smoothstep(0.008, 0.018, d_ell)) * front_v
+        socket = 0.008 * (1.0 - smoothstep(0.008, 0.018, d_ell)) * front_v
         z_face = all_v[:, 2] - socket
         r2 = rc**2 - d[:, 0] ** 2 - d[:, 1] ** 2
         z_sph = np.where((r2 > 0) & front_v, c[2] + np.sqrt(np.clip(r2, 0.0, None)), -1.0)
@@ -486,7 +493,7 @@ def build_head_mesh(shape: HeadShape) -> HeadMesh:
     ym = shape.y_mouth
     z_lips = float(skin_v[m_up[k // 2], 2])
     unit, sphere_faces = _unit_sphere(12, 20)
-    cav = unit * np.array([mw * 0.95, 0.017 * shape.lower_face_scale, 0.020]) + [0, ym - 0.002, z_lips - 0.024]
+    cav = unit * np.array([mw * 1.2, 0.015 * shape.lower_face_scale, 0.019]) + [0, ym - 0.001, z_lips - 0.025]
     dark = srgb_to_linear((0.22, 0.06, 0.07))
     b.add(cav, sphere_faces[:, ::-1], dark, CAVITY, cav[:, :2])
 
@@ -494,7 +501,7 @@ def build_head_mesh(shape: HeadShape) -> HeadMesh:
     for part, y_mid in ((TEETH_UPPER, ym + 0.0045), (TEETH_LOWER, ym - 0.0045)):
         a = np.linspace(-1, 1, 41)
         ang = np.linspace(0, 2 * np.pi, 10, endpoint=False)
-        wt, dt = mw * 0.85, 0.014
+        wt, dt = mw * 0.78, 0.020
         z0 = z_lips - 0.0095
         px, pz = wt * a, z0 - dt * a**2
         tx, tz = wt * np.ones_like(a), -2 * dt * a
@@ -520,7 +527,7 @@ def build_head_mesh(shape: HeadShape) -> HeadMesh:
 
     # Tongue: a flattened ellipsoid lying on the floor of the mouth.
     unit, sphere_faces = _unit_sphere(8, 16)
-    tongue = unit * np.array([0.017, 0.0055, 0.020]) + [0, ym - 0.0095, z_lips - 0.024]
+    tongue = unit * np.array([0.015, 0.005, 0.018]) + [0, ym - 0.0085, z_lips - 0.027]
     b.add(tongue, sphere_faces, srgb_to_linear((0.72, 0.33, 0.34)), TONGUE, tongue[:, :2])
 
     # Ears: flattened ellipsoids pressed into the sides of the skull.
@@ -597,7 +604,7 @@ def _side_field(
     """Smooth 0..1 membership of one side of a slit: sharp along the slit, widening away from its ends."""
     width = 0.001 + spread * np.maximum(np.abs(x - x_centre) - half_width, 0.0)
     s = (y_slit - yd) / width if below else (yd - y_slit) / width
-    return np.asarray(_smoothstep(-1.0, 1.0, s))
+    return np.asarray(smoothstep(-1.0, 1.0, s))
 
 
 def _edge_ids(
@@ -611,34 +618,46 @@ def _edge_ids(
     return np.asarray(grid[i_mouth - direction * steps, cols], dtype=np.int32)
 
 
-def _skin_colors(v: np.ndarray, m: np.ndarray, shape: HeadShape) -> np.ndarray:
-    """(n, 3) linear colours of the skin vertices: skin, lips, brows, painted hair, cheeks."""
+def skin_masks(v: np.ndarray, m: np.ndarray, shape: HeadShape) -> dict[str, np.ndarray]:
+    """0..1 weights of the painted areas of skin vertices ``v`` (material coords ``m``): lips, brows, hair."""
     x, yd = m[:, 0], m[:, 1]
     ax = np.abs(x)
-    skin = srgb_to_linear(shape.skin_srgb)
-    col = np.broadcast_to(skin, v.shape).copy()
-    # warm cheeks and a slightly darker nose underside
-    col *= 1.0 + 0.06 * _gauss(ax, yd, 0.038, -0.038, 0.012, 0.012)[:, None] * np.array([0.5, -0.6, -0.6])
-    col *= 1.0 - 0.45 * _gauss(ax, yd, 0.0085, -0.0465, 0.0022, 0.0012)[:, None]  # nostrils
-    # lips: vermilion between the borders
     mw = shape.mouth_half_width_m
     across = np.clip(1.0 - (x / (mw * 1.03)) ** 2, 0.0, 1.0)
     up_h = 0.0083 * shape.lip_fullness * np.sqrt(across)
     lo_h = 0.0098 * shape.lip_fullness * np.sqrt(across)
-    lip = ((yd >= Y_MOUTH_D) & (yd - Y_MOUTH_D < up_h)) | ((yd < Y_MOUTH_D) & (Y_MOUTH_D - yd < lo_h))
-    lip_w = lip.astype(float) * _smoothstep(0.0, 0.15, across)
-    col = col * (1 - lip_w[:, None]) + srgb_to_linear(shape.lip_srgb) * lip_w[:, None]
+    above = yd - Y_MOUTH_D
+    lip = np.where(above >= 0, smoothstep(0.0012, -0.0012, above - up_h), smoothstep(0.0012, -0.0012, -above - lo_h))
+    lips = lip * smoothstep(0.0, 0.15, across) * (v[:, 2] > 0.0)
     # brows: an arched band over each eye, thicker at the inner end
     t = (ax - 0.012) / 0.044
     brow_y = 0.021 + 0.007 * np.sin(np.pi * np.clip(t, 0, 1) * 0.85) - 0.003 * np.clip(t, 0, 1)
     thick = 0.0060 * (1.0 - 0.45 * np.clip(t, 0, 1))
-    brow = (1 - _smoothstep(0.6, 1.0, np.abs(yd - brow_y) / thick)) * _smoothstep(-0.08, 0.05, t)
-    brow *= 1 - _smoothstep(0.95, 1.08, t)
-    brow *= v[:, 2] > -0.03
-    col = col * (1 - brow[:, None]) + srgb_to_linear(shape.brow_srgb) * brow[:, None]
+    brows = (1 - smoothstep(0.6, 1.0, np.abs(yd - brow_y) / thick)) * smoothstep(-0.08, 0.05, t)
+    brows *= (1 - smoothstep(0.95, 1.08, t)) * (v[:, 2] > -0.03)
     # painted hair: above a hairline that drops from the forehead to the nape
     c = (v[:, 2] - Z_CENTRE) / np.maximum(np.hypot(v[:, 0], v[:, 2] - Z_CENTRE), 1e-9)
     line = np.where(c > 0, 0.024 + 0.044 * np.abs(c) ** 0.7, 0.024 + 0.085 * c)
-    hair = _smoothstep(-0.006, 0.006, v[:, 1] - line)
-    col = col * (1 - hair[:, None]) + srgb_to_linear(shape.hair_srgb) * hair[:, None]
+    hair = smoothstep(-0.006, 0.006, v[:, 1] - line)
+    return {"lips": lips, "brows": brows, "hair": hair}
+
+
+def brow_line(x: np.ndarray) -> np.ndarray:
+    """Design height (m) of the middle of the painted brow above frontal position ``x``."""
+    t = np.clip((np.abs(x) - 0.012) / 0.044, 0, 1)
+    return np.asarray(0.021 + 0.007 * np.sin(np.pi * t * 0.85) - 0.003 * t)
+
+
+def _skin_colors(v: np.ndarray, m: np.ndarray, shape: HeadShape) -> np.ndarray:
+    """(n, 3) linear colours of the skin vertices: skin, lips, brows, painted hair, cheeks."""
+    x, yd = m[:, 0], m[:, 1]
+    ax = np.abs(x)
+    col = np.broadcast_to(srgb_to_linear(shape.skin_srgb), v.shape).copy()
+    # warm cheeks and darker nostrils
+    col *= 1.0 + 0.06 * gauss(ax, yd, 0.038, -0.038, 0.012, 0.012)[:, None] * np.array([0.5, -0.6, -0.6])
+    col *= 1.0 - 0.30 * gauss(ax, yd, 0.0085, -0.0475, 0.0020, 0.0010)[:, None]
+    masks = skin_masks(v, m, shape)
+    for name, rgb in (("lips", shape.lip_srgb), ("brows", shape.brow_srgb), ("hair", shape.hair_srgb)):
+        w = masks[name][:, None]
+        col = col * (1 - w) + srgb_to_linear(rgb) * w
     return col
