@@ -59,6 +59,7 @@ def test_dba_reduces_sum_of_squared_distances() -> None:
     curves, groups = smiles_and_frowns(1)
     smiles = [c for c, g in zip(curves, groups, strict=True) if g == 0]
     result = dtw_barycenter(smiles, init=smiles[0], max_iter=20)
+
     def cost(curve: np.ndarray) -> float:
         return sum(dtw_distance(curve, s) ** 2 for s in smiles)
 
@@ -71,7 +72,7 @@ def test_dba_reduces_sum_of_squared_distances() -> None:
 
 
 def test_representative_curve_medoid_and_dba() -> None:
-    curves, groups = smiles_and_frowns(2)
+    curves, _ = smiles_and_frowns(2)
     medoid = representative_curve(curves, "medoid", random_state=0)
     model = KMedoidsDTW(random_state=0).fit(curves)
     np.testing.assert_array_equal(medoid[:, 0], curves[int(model.medoid_indices_[0])])

@@ -53,8 +53,8 @@ TIME_UNITS: dict[str, float] = {
 
 _WRITE_NAMES = {24.0: "film", 25.0: "pal", 30.0: "ntsc", 48.0: "show", 50.0: "palf", 60.0: "ntscf"}
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
-_TANGENTS = ("global", "fixed", "linear", "flat", "step", "stepnext", "slow", "fast", "smooth", "clamped")
-_TANGENTS += ("plateau", "spline", "auto")
+_TANGENTS: tuple[str, ...] = ("global", "fixed", "linear", "flat", "step", "stepnext", "slow", "fast", "smooth")
+_TANGENTS += ("clamped", "plateau", "spline", "auto")
 
 CurvesInput = Clip | Mapping[str, tuple[np.ndarray, np.ndarray]]
 """A :class:`~mien.facs.clip.Clip` or a dict ``name -> (times_s (n,), values (n,))``."""
@@ -203,7 +203,9 @@ def write(
         frames = start_frame + times[keep] * rate
         first_frame = min(first_frame, float(frames[0]))
         last_frame = max(last_frame, float(frames[-1]))
-        keys = "\n".join(f"    {_frame_text(f)} {_number(v)} linear linear 1 1 0;" for f, v in zip(frames, values[keep]))
+        keys = "\n".join(
+            f"    {_frame_text(f)} {_number(v)} linear linear 1 1 0;" for f, v in zip(frames, values[keep], strict=True)
+        )
         blocks.append(
             f"anim {name} {name} {node} 0 0 {index};\n"
             "animData {\n"
@@ -352,7 +354,7 @@ def read(path: str | Path) -> AnimFile:
         current = None
         keyword = tokens[0]
         if keyword == "anim":
-            if tokens[-1] != ";" or len(tokens) not in (6, 8):
+            if tokens[-1] != ";" or len(tokens) not in (6, 8) or not all(t.isdigit() for t in tokens[-4:-1]):
                 raise InvalidValueError(where, line, "'anim <attr> <leaf> <node> <row> <child> <index>;'")
             if len(tokens) == 8:
                 current = _Builder(tokens[1], tokens[2], tokens[3])
@@ -448,7 +450,7 @@ def to_clip(anim: AnimFile, fps: float | None = None) -> Clip:
     if not anim.curves:
         raise InvalidValueError("anim", "no curves", "a file with at least one animated curve")
     duration_s = (anim.end_frame - anim.start_frame) / anim.fps
-    n_frames = int(math.floor(duration_s * rate + 1e-9)) + 1
+    n_frames = math.floor(duration_s * rate + 1e-9) + 1
     frames = anim.start_frame + np.arange(n_frames) * (anim.fps / rate)
     values = np.stack([evaluate_curve(c, frames, anim.fps) for c in anim.curves.values()], axis=1)
     return Clip(values, rate, tuple(anim.curves))

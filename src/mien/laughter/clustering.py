@@ -227,11 +227,14 @@ class KMeansDTW:
         centers = [items[m].copy() for m in start.medoid_indices_]
         labels = start.labels_.copy()
         n_iter = 0
-        for n_iter in range(1, self.max_iter + 1):
+        while n_iter < self.max_iter:
+            n_iter += 1
             for c in range(len(centers)):
                 members = [items[i] for i in np.flatnonzero(labels == c)]
                 if members:
-                    centers[c] = dtw_barycenter(members, init=centers[c], max_iter=self.dba_iter, window=self.window).curve
+                    centers[c] = dtw_barycenter(
+                        members, init=centers[c], max_iter=self.dba_iter, window=self.window
+                    ).curve
             distances = dtw_cross_distance_matrix(items, centers, window=self.window)
             new_labels = np.argmin(distances, axis=1)
             if np.array_equal(new_labels, labels):

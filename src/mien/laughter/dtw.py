@@ -45,6 +45,7 @@ __all__ = [
     "have_numba",
 ]
 
+_numba: Any
 try:
     import numba as _numba
 
@@ -316,7 +317,7 @@ def _run_pairs(
         _pairs_kernel(*args)
         return out
     previous = _numba.get_num_threads()
-    _numba.set_num_threads(min(n_jobs, _numba.config.NUMBA_NUM_THREADS))
+    _numba.set_num_threads(min(n_jobs, int(_numba.config.NUMBA_NUM_THREADS)))
     try:
         _pairs_kernel(*args)
     finally:

@@ -128,7 +128,9 @@ def plot_dtw_heatmap(
                 for j in range(n):
                     if i != j:
                         color = "black" if values[i, j] > middle else "white"
-                        axes.text(j, i, f"{values[i, j]:.{decimals}f}", ha="center", va="center", color=color, fontsize=8)
+                        axes.text(
+                            j, i, f"{values[i, j]:.{decimals}f}", ha="center", va="center", color=color, fontsize=8
+                        )
         figure.tight_layout()
         target = Path(path)
         figure.savefig(target, dpi=100)

@@ -256,42 +256,55 @@ def _type_dtw(series: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     return dtw_distance_matrices_per_channel(series, n_jobs=1), dtw_distance_matrix(series, n_jobs=1)
 
 
-def _run_all(
-    function: Callable[[Any], Any],
-    items: Sequence[Any],
-    workers: int | None,
-    client: Any,
-    desc: str,
-    show_progress: bool,
-) -> Iterator[tuple[int, Any]]:
-    """Yield ``(index, result or exception)`` as each item finishes, on the chosen backend."""
-    if not items:
-        return
-    if client is not None:
-        from dask.distributed import as_completed as dask_completed
+class _Backend:
+    """Where parallel work runs: this process (``workers=0``), a lazily started process pool, or Dask."""
 
-        futures = [client.submit(function, item, pure=False) for item in items]
-        index = {f.key: i for i, f in enumerate(futures)}
-        for future in progress(dask_completed(futures), len(futures), desc, show_progress):
-            try:
-                yield index[future.key], future.result()
-            except Exception as exc:
-                yield index[future.key], exc
-        return
-    if workers == 0:
-        for i, item in progress(enumerate(items), len(items), desc, show_progress):
-            try:
-                yield i, function(item)
-            except Exception as exc:
-                yield i, exc
-        return
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor, as_completed
+    def __init__(self, workers: int | None, client: Any, size_hint: int) -> None:
+        self.workers = workers
+        self.client = client
+        self.size_hint = max(1, size_hint)
+        self.pool: Any = None
 
-    count = min(workers or os.cpu_count() or 1, len(items))
-    # spawn, not fork: the parent may hold numba/mediapipe threads, which fork would copy half-alive
-    with ProcessPoolExecutor(count, mp_context=multiprocessing.get_context("spawn")) as pool:
-        pending: dict[Future[Any], int] = {pool.submit(function, item): i for i, item in enumerate(items)}
+    def close(self) -> None:
+        """Shut the process pool down (a Dask client belongs to the caller)."""
+        if self.pool is not None:
+            self.pool.shutdown()
+            self.pool = None
+
+    def run(
+        self, function: Callable[[Any], Any], items: Sequence[Any], desc: str, show_progress: bool
+    ) -> Iterator[tuple[int, Any]]:
+        """Yield ``(index, result or exception)`` as each item finishes."""
+        if not items:
+            return
+        if self.client is not None:
+            from dask.distributed import as_completed as dask_completed
+
+            futures = [self.client.submit(function, item, pure=False) for item in items]
+            index = {f.key: i for i, f in enumerate(futures)}
+            for future in progress(dask_completed(futures), len(futures), desc, show_progress):
+                try:
+                    yield index[future.key], future.result()
+                except Exception as exc:
+                    yield index[future.key], exc
+            return
+        if self.workers == 0:
+            for i, item in progress(enumerate(items), len(items), desc, show_progress):
+                try:
+                    yield i, function(item)
+                except Exception as exc:
+                    yield i, exc
+            return
+        if self.pool is None:
+            import multiprocessing
+            from concurrent.futures import ProcessPoolExecutor
+
+            count = min(self.workers or os.cpu_count() or 1, self.size_hint)
+            # spawn, not fork: the parent may hold numba/mediapipe threads, which fork would copy half-alive
+            self.pool = ProcessPoolExecutor(count, mp_context=multiprocessing.get_context("spawn"))
+        from concurrent.futures import as_completed
+
+        pending: dict[Future[Any], int] = {self.pool.submit(function, item): i for i, item in enumerate(items)}
         for future in progress(as_completed(pending), len(pending), desc, show_progress):
             try:
                 yield pending[future], future.result()
@@ -373,8 +386,9 @@ def learn_library(
             todo.append(job)
     resumed = tuple(Path(v).name for v in outcomes)
     client, owned = _connect(scheduler)
+    backend = _Backend(workers, client, len(videos))
     try:
-        for index, outcome in _run_all(_process_video, todo, workers, client, "videos", show_progress):
+        for index, outcome in backend.run(_process_video, todo, "videos", show_progress):
             job = todo[index]
             if isinstance(outcome, BaseException):
                 outcome = _VideoOutcome(job.video, (), 0.0, f"worker failed: {outcome!r}", False)
@@ -390,11 +404,12 @@ def learn_library(
         series = [[take.curves.values for take in group] for group in by_type.values()]
         matrices: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         names = list(by_type)
-        for index, result in _run_all(_type_dtw, series, workers, client, "DTW", show_progress):
+        for index, result in backend.run(_type_dtw, series, "DTW", show_progress):
             if isinstance(result, BaseException):
                 raise result
             matrices[names[index]] = result
     finally:
+        backend.close()
         if owned:
             client.close()
     library_fps = takes[0].curves.fps

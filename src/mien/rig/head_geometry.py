@@ -498,11 +498,11 @@ def build_head_mesh(shape: HeadShape) -> HeadMesh:
     b.add(cav, sphere_faces[:, ::-1], dark, CAVITY, cav[:, :2])
 
     # Teeth: an elliptic tube swept along a parabolic dental arch, with faint gaps between teeth.
-    for part, y_mid in ((TEETH_UPPER, ym + 0.0045), (TEETH_LOWER, ym - 0.0045)):
+    for part, y_mid, back in ((TEETH_UPPER, ym + 0.0018, 0.0), (TEETH_LOWER, ym - 0.0040, 0.0025)):
         a = np.linspace(-1, 1, 41)
         ang = np.linspace(0, 2 * np.pi, 10, endpoint=False)
         wt, dt = mw * 0.78, 0.020
-        z0 = z_lips - 0.0095
+        z0 = z_lips - 0.0095 - back
         px, pz = wt * a, z0 - dt * a**2
         tx, tz = wt * np.ones_like(a), -2 * dt * a
         tn = np.hypot(tx, tz)

@@ -1,0 +1,41 @@
+"""Options and output shared by the subcommands that produce AU curves (emote, au, demo)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+__all__ = ["add_curve_options", "emit_curves"]
+
+
+def add_curve_options(parser: argparse.ArgumentParser, duration_s: float = 2.0) -> None:
+    """Add ``--duration --fps --seed --no-idle -o --plot`` to ``parser``."""
+    parser.add_argument("--duration", type=float, default=duration_s, help="seconds to generate (default %(default)s)")
+    parser.add_argument("--fps", type=float, default=60.0, help="frames per second (default %(default)s)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the idle behaviour (default %(default)s)")
+    parser.add_argument("--no-idle", action="store_true", help="switch blinks, micro-motion, gaze and wobble off")
+    parser.add_argument(
+        "-o", "--output", type=Path, help="save the curves: .csv, .json, .npz (default: print active channels as CSV)"
+    )
+    parser.add_argument("--plot", type=Path, metavar="PNG", help="also save a plot of the curves")
+
+
+def emit_curves(clip, args: argparse.Namespace, title: str, events: Sequence[tuple[float, str]] = ()) -> None:  # type: ignore[no-untyped-def]
+    """Save or print ``clip`` and plot it, as the options in ``args`` say."""
+    from mien.exchange import writer_for
+
+    if args.output is not None:
+        writer_for(args.output)(clip, args.output)
+        print(f"curves: {args.output} ({clip.n_frames} frames at {clip.fps:g} fps, {len(clip.channels)} channels)")
+    else:
+        active = clip.select(clip.active_channels(1e-3) or clip.channels[:1])
+        print("time_s," + ",".join(active.channels))
+        for time_s, row in zip(active.times_s, active.values, strict=True):
+            print(f"{time_s:.4f}," + ",".join(f"{v:.4f}" for v in row))
+    if args.plot is not None:
+        from mien.plot import plot_clip
+
+        plot_clip(clip, args.plot, title=title, events=events)
+        print(f"plot: {args.plot}", file=sys.stderr if args.output is None else sys.stdout)
