@@ -16,6 +16,7 @@ import os
 import statistics
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -59,56 +60,56 @@ def expression_weights(rig: Rig, n_frames: int) -> np.ndarray:
     return weights.astype(np.float32)
 
 
-def median_s(function: object, repeats: int = REPEATS) -> float:
+def median_s(function: Callable[[], object], repeats: int = REPEATS) -> float:
     """Median wall time of ``function()`` over ``repeats`` runs, seconds."""
     times = []
     for _ in range(repeats):
         start = time.perf_counter()
-        function()  # type: ignore[operator]
+        function()
         times.append(time.perf_counter() - start)
     return statistics.median(times)
 
 
+def measure(rig: Rig, weights: np.ndarray, samples: int, out: Path, crf: int, preset: str) -> str:
+    """One line of results for ``samples``-times MSAA: end to end, serial baseline, and the split."""
+    camera = CAMERA_PRESETS["portrait"]
+    n = len(weights)
+    frames: list[np.ndarray] = []
+    with make_renderer(rig, camera, SIZE, samples=samples) as renderer:
+        render_s = median_s(lambda: frames.__setitem__(slice(None), list(iter_frames(rig, weights, renderer))))
+    encode_s = median_s(lambda: write_mp4(frames, out, 30, crf=crf, preset=preset))
+    total_s = median_s(
+        lambda: render_clip(
+            rig, weights, out, 30, camera, SIZE, progress=False, crf=crf, preset=preset, samples=samples
+        )
+    )
+    fps, serial_fps = n / total_s, n / (render_s + encode_s)
+    return (
+        f"samples={samples}: end to end {fps:.1f} fps ({fps / TARGET_FPS:.2f} x the {TARGET_FPS:.0f} fps target; "
+        f"{fps / serial_fps:.2f} x the serial baseline of {serial_fps:.1f} fps); "
+        f"render {1000 * render_s / n:.1f} ms/frame, encode {1000 * encode_s / n:.1f} ms/frame"
+    )
+
+
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    """Run the benchmark and print one line per MSAA setting."""
+    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     parser.add_argument("--frames", type=int, default=120)
-    parser.add_argument("--samples", type=int, nargs="+", default=[4, 0], help="MSAA settings to compare")
+    parser.add_argument("--samples", type=int, nargs="+", default=[0, 4], help="MSAA settings (0 = clip default)")
     parser.add_argument("--preset", default="veryfast", help="x264 preset")
     parser.add_argument("--crf", type=int, default=20)
     args = parser.parse_args()
 
     rig = load_rig()
     weights = expression_weights(rig, args.frames)
-    camera = CAMERA_PRESETS["portrait"]
-    n = args.frames
-    print(f"rig {rig.name}: {rig.n_vertices} vertices, {len(rig.faces)} triangles; {n} frames {SIZE[0]}x{SIZE[1]}")
-    print(f"x264 preset {args.preset}, crf {args.crf}; {os.cpu_count()} CPUs; median of {REPEATS} repeats")
+    print(f"rig {rig.name}: {rig.n_vertices} vertices, {len(rig.faces)} triangles; {args.frames} frames 512x512")
+    load = os.getloadavg()[0]
+    print(f"x264 {args.preset} crf {args.crf}; {os.cpu_count()} CPUs, load {load:.1f}; median of {REPEATS} repeats")
     with tempfile.TemporaryDirectory() as folder:
         out = Path(folder) / "bench.mp4"
-        render_clip(rig, weights[:2], out, 30, camera, SIZE, progress=False)  # warm-up: numba, EGL, ffmpeg
+        render_clip(rig, weights[:2], out, 30, CAMERA_PRESETS["portrait"], SIZE, progress=False)  # warm-up
         for samples in args.samples:
-            with make_renderer(rig, camera, SIZE, samples=samples) as renderer:
-                frames: list[np.ndarray] = []
-
-                def render_only(renderer: object = renderer, frames: list[np.ndarray] = frames) -> None:
-                    frames[:] = list(iter_frames(rig, weights, renderer))  # type: ignore[arg-type]
-
-                render_s = median_s(render_only)
-            encode_s = median_s(lambda: write_mp4(frames, out, 30, crf=args.crf, preset=args.preset))
-
-            def end_to_end(samples: int = samples) -> None:
-                render_clip(
-                    rig, weights, out, 30, camera, SIZE, progress=False, crf=args.crf, preset=args.preset, samples=samples
-                )
-
-            total_s = median_s(end_to_end)
-            fps = n / total_s
-            serial_fps = n / (render_s + encode_s)
-            print(
-                f"samples={samples}: end to end {fps:.1f} fps ({fps / TARGET_FPS:.2f} x the {TARGET_FPS:.0f} fps "
-                f"target; {fps / serial_fps:.2f} x the serial baseline of {serial_fps:.1f} fps); "
-                f"render {1000 * render_s / n:.1f} ms/frame, encode {1000 * encode_s / n:.1f} ms/frame"
-            )
+            print(measure(rig, weights, samples, out, args.crf, args.preset))
 
 
 if __name__ == "__main__":

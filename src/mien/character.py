@@ -26,7 +26,7 @@ import numpy as np
 
 from mien.affect.basis import facs_basis, feature_point_basis
 from mien.affect.emotions import Blend, blend_components, check_intensity
-from mien.affect.engine import EmotionEngine
+from mien.affect.engine import EmotionEngine, mood_step, shown_mood
 from mien.affect.envelope import Envelope, envelope_values
 from mien.errors import InvalidValueError
 from mien.facs.catalogue import FACE_CHANNELS, POSE_CHANNELS
@@ -114,6 +114,8 @@ class Character:
             self._basis, self._mood_basis = feature_point_basis(), feature_point_basis(closed_mouth=True)
         self.feature_weights = np.zeros(feature_point_basis().shape[1])
         """(54,) feature-point target weights (metres) of the last step (``"feature_points"`` basis only)."""
+        self.last_feature_weights: np.ndarray | None = None
+        """(n_frames, 54) feature weights of the last :meth:`run` (``"feature_points"`` basis only)."""
         self._laughs: list[_ActiveLaugh] = []
         self._frame = np.zeros(_N)
         self._emotion = np.zeros(6)
@@ -305,8 +307,6 @@ class CharacterBatch:
         self._frames = np.zeros((n, _N))
         self._mouth = _mouth_channel_ids()
         self._t_s: float | None = None
-        self._mood_k = 0.0
-        self._mood_step = -1.0
 
     @property
     def n_characters(self) -> int:
@@ -383,14 +383,10 @@ class CharacterBatch:
         dt = t_s - last
         n_steps = math.ceil(dt / self.mood_max_step_s) if dt > self.mood_max_step_s else 1
         step = dt / n_steps
-        if step != self._mood_step:
-            self._mood_step = step
-            self._mood_k = -math.expm1(-step / self.mood_time_constant_s)
-        k, half_gain = self._mood_k, 0.5 * self.mood_gain
         previous = self._emotion
         for s in range(1, n_steps + 1):
             current = self._emotion_at(t_s if s == n_steps else last + s * step)
-            self._mood += k * (half_gain * (previous + current) - self._mood)
+            mood_step(self._mood, previous, current, step, self.mood_time_constant_s, self.mood_gain)
             previous = current
         self._emotion = previous
         finished = self._ev_start + self._ev_total() <= t_s
@@ -415,9 +411,8 @@ class CharacterBatch:
         self._advance_affect(t_s)
         self._t_s = t_s
         frames = self._frames
-        occlusion = 1.0 - np.minimum(1.0, self._emotion.sum(axis=1, keepdims=True))
         np.dot(self._emotion, self._basis, out=frames)
-        frames += np.dot(occlusion * self._mood, self._mood_basis)
+        frames += np.dot(shown_mood(self._emotion, self._mood), self._mood_basis)
         frames += self.current
         if self.idle is not None:
             mouth = frames[:, self._mouth].max(axis=1)

@@ -187,8 +187,28 @@ def test_generate_from_a_given_library() -> None:
     from mien.laughter.library import LaughLibrary
 
     curve = default_library().curve("laughter")
-    doubled = LaughLibrary({"laughter": Clip(curve.values * 2, curve.fps, CONTROLLER_NAMES)}, default_library().metadata)
+    doubled = LaughLibrary(
+        {"laughter": Clip(curve.values * 2, curve.fps, CONTROLLER_NAMES)}, default_library().metadata
+    )
     mine, builtin = generate("laughter", library=doubled), generate("laughter")
     np.testing.assert_allclose(mine.controllers.values, 2 * builtin.controllers.values, atol=1e-12)
     np.testing.assert_allclose(mine.face_clip.values, builtin.face_clip.values, atol=1e-9)  # AUs are normalised
     assert generate("sly_smile", library=doubled) == generate("sly_smile")  # missing type: built-in
+
+
+def test_cli_laugh(tmp_path: object, capsys: pytest.CaptureFixture[str]) -> None:
+    from pathlib import Path
+
+    from mien.cli import main
+
+    assert main(["laugh", "--list"]) == 0
+    listing = capsys.readouterr().out.splitlines()
+    assert [line.split()[0] for line in listing] == list(LAUGH_TYPES)
+    assert main(["laugh", "sly_smile", "--seed", "2"]) == 0
+    assert "AU4R" in capsys.readouterr().out
+    out = Path(str(tmp_path)) / "sly.json"
+    assert main(["laugh", "sly_smile", "--duration", "2", "--fps", "30", "-o", str(out)]) == 0
+    assert "60 frames at 30 fps" in capsys.readouterr().out
+    assert main(["laugh", "giggle"]) == 2
+    assert "unknown laugh type 'giggle'" in capsys.readouterr().err
+    assert main(["laugh", "laughter", "--duration", "0"]) == 2

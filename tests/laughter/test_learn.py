@@ -38,7 +38,12 @@ def corpus(shared_data: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
 def first_run(corpus: Path, landmarker_path: Path, tmp_path_factory: pytest.TempPathFactory) -> LearnResult:
     out = tmp_path_factory.mktemp("serial") / "lib.npz"
     return learn_library(
-        corpus, corpus / "labels.csv", out, workers=0, model=landmarker_path, report_dir=out.parent / "report",
+        corpus,
+        corpus / "labels.csv",
+        out,
+        workers=0,
+        model=landmarker_path,
+        report_dir=out.parent / "report",
         show_progress=False,
     )
 
@@ -82,7 +87,11 @@ def test_report_folder(first_run: LearnResult) -> None:
     report = first_run.path.parent / "report"
     names = sorted(p.name for p in report.iterdir())
     assert names == [
-        "dtw_laughter.png", "dtw_laughter.txt", "dtw_laughter_smileFrown.png", "prototype_laughter.png", "summary.txt"
+        "dtw_laughter.png",
+        "dtw_laughter.txt",
+        "dtw_laughter_smileFrown.png",
+        "prototype_laughter.png",
+        "summary.txt",
     ]
     summary = (report / "summary.txt").read_text()
     assert "takes used: 2" in summary and "no face found" in summary and "broken.mp4" in summary
@@ -111,10 +120,16 @@ def test_process_pool_and_dask_give_identical_libraries(
         corpus, corpus / "labels.csv", tmp_path / "pool.npz", workers=2, model=landmarker_path, show_progress=False
     )
     assert pooled.computed  # really ran in the pool, not from checkpoints
-    with distributed.LocalCluster(n_workers=1, processes=False, threads_per_worker=2, dashboard_address=None) as cluster:
+    with distributed.LocalCluster(
+        n_workers=1, processes=False, threads_per_worker=2, dashboard_address=None
+    ) as cluster:
         with distributed.Client(cluster) as client:
             dasked = learn_library(
-                corpus, corpus / "labels.csv", tmp_path / "dask.npz", scheduler=client, model=landmarker_path,
+                corpus,
+                corpus / "labels.csv",
+                tmp_path / "dask.npz",
+                scheduler=client,
+                model=landmarker_path,
                 show_progress=False,
             )
     assert dasked.computed
@@ -143,15 +158,29 @@ def test_learned_library_drives_the_generator(first_run: LearnResult) -> None:
     assert generate("sly_smile", library=first_run.library) == generate("sly_smile")
 
 
-def test_cli_learn_and_laugh(first_run: LearnResult, corpus: Path, landmarker_path: Path, tmp_path: Path,
-                             capsys: pytest.CaptureFixture[str]) -> None:
+def test_cli_learn_and_laugh(
+    first_run: LearnResult, corpus: Path, landmarker_path: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     from mien.cli import main
 
     out = tmp_path / "cli.npz"
-    code = main([
-        "learn", str(corpus), "--labels", str(corpus / "labels.csv"), "-o", str(out), "--workers", "0",
-        "--model", str(landmarker_path), "--method", "dba", "--quiet",
-    ])
+    code = main(
+        [
+            "learn",
+            str(corpus),
+            "--labels",
+            str(corpus / "labels.csv"),
+            "-o",
+            str(out),
+            "--workers",
+            "0",
+            "--model",
+            str(landmarker_path),
+            "--method",
+            "dba",
+            "--quiet",
+        ]
+    )
     assert code == 0 and out.is_file()
     assert "takes used: 2" in capsys.readouterr().out
     assert load_library(out).metadata.method == "dba"

@@ -56,10 +56,10 @@ def test_clip_to_png_frames_follows_the_weights(rig: Rig, tmp_path: Path) -> Non
 
 def test_still_matches_the_clips_first_frame(rig: Rig, tmp_path: Path) -> None:
     weights = jaw_weights(rig, 2)
-    still = render_still(rig, weights[0], CAMERA_PRESETS["frontal-1m"], (64, 64))
+    still = render_still(rig, weights[0], CAMERA_PRESETS["frontal-1m"], (64, 64), samples=0)
     folder = render_clip(rig, weights, tmp_path / "f", 30, CAMERA_PRESETS["frontal-1m"], (64, 64), progress=False)
     np.testing.assert_array_equal(np.asarray(Image.open(folder / "frame_000000.png")), still)
-    neutral = render_still(rig, None, CAMERA_PRESETS["frontal-1m"], (64, 64))
+    neutral = render_still(rig, None, CAMERA_PRESETS["frontal-1m"], (64, 64), samples=0)
     np.testing.assert_array_equal(neutral, still)  # weight 0 is the neutral face
 
 
@@ -86,8 +86,8 @@ def test_poses_go_through_apply_pose(rig: Rig, tmp_path: Path) -> None:
 
     camera = CAMERA_PRESETS["frontal-1m"]
     pose = np.array([40.0, 10.0, 0.0, 0.0, 0.0])
-    turned = render_still(rig, None, camera, (96, 96), pose=pose)
-    with OffscreenRenderer(visible_faces(rig), 96, 96, camera, rig_vertex_colors(rig)) as renderer:
+    turned = render_still(rig, None, camera, (96, 96), pose=pose, samples=0)
+    with OffscreenRenderer(visible_faces(rig), 96, 96, camera, rig_vertex_colors(rig), samples=0) as renderer:
         expected = renderer.render(apply_pose(rig, rig.neutral, pose[:3], pose[3:]))
     np.testing.assert_array_equal(turned, expected)
     assert np.abs(render_still(rig, None, camera, (96, 96)).astype(int) - turned).mean() > 1

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 from pathlib import Path
 
@@ -139,7 +140,7 @@ def test_identity_presets_give_different_faces(ict: Rig, ict_dir: Path) -> None:
     mean = load_ict_facekit(ict_dir, identity=presets["mean"])
     np.testing.assert_allclose(mean.neutral, ict.neutral, atol=1e-7)
     difference = np.linalg.norm(a.neutral - b.neutral, axis=1)
-    assert difference.max() > 0.02 and difference[: 9409].mean() > 0.004  # centimetres apart over the face
+    assert difference.max() > 0.02 and difference[:9409].mean() > 0.004  # centimetres apart over the face
     np.testing.assert_allclose(a.eye_centers.mean(axis=0), 0.0, atol=1e-6)  # re-centred per identity
     assert a.targets[0] is not None and a.target_names == ict.target_names
 
@@ -191,13 +192,15 @@ def test_expression_with_wrong_vertex_count(ict_dir: Path, tmp_path: Path) -> No
 
 def test_neutral_with_wrong_vertex_count(ict_dir: Path, tmp_path: Path) -> None:
     folder = _linked_copy(ict_dir, tmp_path, {"generic_neutral_mesh.obj": "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"})
-    with pytest.raises(InvalidValueError, match="generic_neutral_mesh.obj vertex count=3"):
+    with pytest.raises(InvalidValueError, match=r"generic_neutral_mesh\.obj vertex count=3"):
         load_ict_facekit(folder, cache=False)
 
 
 def test_obj_reader_triangulates_and_resolves_ids(tmp_path: Path) -> None:
     path = tmp_path / "quad.obj"
-    path.write_text("# a quad and a triangle\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0 1.0\nvt 0 0\nf 1/1 2/1 3/1 4/1\nf -1 -2 -3\n")
+    path.write_text(
+        "# a quad and a triangle\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0 1.0\nvt 0 0\nf 1/1 2/1 3/1 4/1\nf -1 -2 -3\n"
+    )
     vertices, faces = read_obj(path)
     assert vertices.shape == (4, 3) and vertices[2].tolist() == [1.0, 1.0, 0.0]
     assert faces.tolist() == [[0, 1, 2], [0, 2, 3], [3, 2, 1]]
@@ -212,3 +215,24 @@ def test_obj_reader_rejects_bad_files(tmp_path: Path, text: str) -> None:
     path.write_text(text)
     with pytest.raises(InvalidValueError, match="OBJ file"):
         read_obj(path)
+
+
+def test_assets_command_reports_ict(
+    ict: Rig, ict_dir: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from mien.cli import main
+
+    monkeypatch.setenv("MIEN_CONFIG", str(tmp_path / "none.toml"))
+    monkeypatch.setenv("MIEN_ICT_FACEKIT", str(ict_dir))
+    monkeypatch.delenv("MIEN_FACE_LANDMARKER", raising=False)
+    assert main(["assets", "--json"]) == 0
+    report = {entry["name"]: entry for entry in json.loads(capsys.readouterr().out)["assets"]}
+    ict_entry = report["ict_facekit"]
+    assert ict_entry["found"] and ict_entry["complete"] and ict_entry["source"] == "environment"
+    assert ict_entry["cache_built"] == ict_cache_file(ict_dir).is_file()
+    assert not report["face_landmarker"]["configured"]
+    monkeypatch.setenv("MIEN_ICT_FACEKIT", str(tmp_path))  # no FaceXModel/ here
+    assert main(["assets"]) == 0
+    text = capsys.readouterr().out
+    assert "ict_facekit: INCOMPLETE" in text and "FaceXModel/" in text
+    assert "face_landmarker: not configured" in text and "export MIEN_FACE_LANDMARKER=" in text

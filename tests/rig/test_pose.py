@@ -18,9 +18,7 @@ PIVOT = np.array([0.0, -0.09, -0.04], np.float32)
 
 def _rig() -> Rig:
     """Vertices: 0 nose tip, 1 crown, 2 left-eye front, 3 right-eye front, 4 a point outside the head region."""
-    neutral = np.array(
-        [[0.0, -0.03, 0.1], [0.0, 0.1, 0.0], [0.03, 0.0, 0.012], [-0.03, 0.0, 0.012], [0.0, -0.3, 0.0]]
-    )
+    neutral = np.array([[0.0, -0.03, 0.1], [0.0, 0.1, 0.0], [0.03, 0.0, 0.012], [-0.03, 0.0, 0.012], [0.0, -0.3, 0.0]])
     eye_centers = np.array([[0.03, 0.0, 0.0], [-0.03, 0.0, 0.0]])
     regions = {"eye_L": np.array([2]), "eye_R": np.array([3]), "head": np.array([0, 1, 2, 3])}
     return Rig(

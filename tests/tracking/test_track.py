@@ -168,3 +168,14 @@ def _tiny_track() -> Track:
         interpolated=np.zeros(n, bool),
         takes=((0, n),),
     )
+
+
+def test_damaged_cache_entry_is_replaced(
+    single_face_video: Path, landmarker_path: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("MIEN_CACHE_DIR", str(tmp_path / "cache"))
+    first = track_video(single_face_video, landmarker_path, show_progress=False)
+    (entry,) = (tmp_path / "cache" / "tracks").glob("*.npz")
+    entry.write_bytes(b"PK\x03\x04 damaged")
+    again = track_video(single_face_video, landmarker_path, show_progress=False)
+    assert np.array_equal(again.landmarks, first.landmarks) and entry.stat().st_size > 1000

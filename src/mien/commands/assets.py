@@ -71,9 +71,10 @@ def _text(report: dict[str, Any]) -> str:
         lines.append(f"{name}: {status}")
         if entry["path"]:
             lines.append(f"  path: {entry['path']} (from {entry['source']})")
-        if "missing_files" in entry and entry["missing_files"]:
+        if entry.get("missing_files"):
             missing = entry["missing_files"]
-            lines.append(f"  missing {len(missing)} files: {', '.join(missing[:8])}{' ...' if len(missing) > 8 else ''}")
+            more = " ..." if len(missing) > 8 else ""
+            lines.append(f"  missing {len(missing)} files: {', '.join(missing[:8])}{more}")
         if "error" in entry:
             lines.append(f"  error: {entry['error']}")
         if "cache_built" in entry and entry.get("complete"):

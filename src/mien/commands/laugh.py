@@ -61,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
             curves = "controllers" if Path(args.output).suffix.lower() == ".anim" else "face"
         clip = result.controllers if curves == "controllers" else result.face_clip
         writer_for(args.output)(clip, args.output)
-        print(f"wrote {curves} curves ({clip.n_frames} frames at {clip.fps:g} fps) to {args.output}")
+        print(f"wrote {curves.rstrip('s')} curves ({clip.n_frames} frames at {clip.fps:g} fps) to {args.output}")
     if args.plot:
         from mien.laughter.generator import plot_result
 

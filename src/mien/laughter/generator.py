@@ -208,7 +208,7 @@ def face_frame_at(result: LaughResult, t_s: float) -> np.ndarray | None:
         return None
     clip = result.face_clip
     position = min(t * clip.fps, clip.n_frames - 1.0)
-    low = int(math.floor(position))
+    low = math.floor(position)
     high = min(low + 1, clip.n_frames - 1)
     weight = position - low
     return np.asarray((1.0 - weight) * clip.values[low] + weight * clip.values[high])

@@ -461,7 +461,9 @@ def _collect_takes(rows: list[LabelRow], outcomes: dict[str, _VideoOutcome]) -> 
             label = row.performer if len(outcome.takes) == 1 else f"{row.performer}#{k}"
             duration = values.shape[0] / outcome.fps
             if duration < MIN_TAKE_S:
-                skipped.append(Skip(f"{name} take {k} ({row.performer})", f"too short ({duration:.2f} s < {MIN_TAKE_S} s)"))
+                skipped.append(
+                    Skip(f"{name} take {k} ({row.performer})", f"too short ({duration:.2f} s < {MIN_TAKE_S} s)")
+                )
                 continue
             curves = Clip(_resample(values, outcome.fps, target_fps), target_fps, CONTROLLER_NAMES)
             takes.append(Take(label, row.type, name, curves))

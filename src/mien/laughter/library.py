@@ -166,8 +166,7 @@ def load_library(path: str | Path) -> LaughLibrary:
         raise InvalidValueError("library channels", channels, "CONTROLLER_NAMES")
     curve_fps = meta.get("curve_fps", {})
     curves = {
-        name: Clip(arrays[f"curve/{name}"], float(curve_fps.get(name, meta["fps"])), channels)
-        for name in meta["types"]
+        name: Clip(arrays[f"curve/{name}"], float(curve_fps.get(name, meta["fps"])), channels) for name in meta["types"]
     }
     metadata = LibraryMetadata(
         source=str(meta["source"]),

@@ -58,9 +58,7 @@ def _code_and_side(channel: str) -> tuple[str, str | None]:
     return body, None
 
 
-def controllers_to_face(
-    controllers: Clip, r: LaughRecipe, reference: Clip, envelope: np.ndarray | None = None
-) -> Clip:
+def controllers_to_face(controllers: Clip, r: LaughRecipe, reference: Clip, envelope: np.ndarray | None = None) -> Clip:
     """Face clip (n, 62) for ``controllers`` (n, 16) of type ``r``, timed like the controllers.
 
     ``reference`` is the library's representative curve of the type (it fixes what "apex" means);

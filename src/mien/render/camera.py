@@ -141,7 +141,7 @@ CAMERA_PRESETS: dict[str, Camera] = {
     "frontal-3m": Camera(yaw_deg=0.0, distance_m=3.0),
     "lateral-1m": Camera(yaw_deg=90.0, distance_m=1.0, target=HEAD_CENTRE_M),
     "lateral-3m": Camera(yaw_deg=90.0, distance_m=3.0, target=HEAD_CENTRE_M),
-    "portrait": Camera(yaw_deg=0.0, pitch_deg=3.0, distance_m=0.8, target=(0.0, -0.025, 0.0)),
+    "portrait": Camera(yaw_deg=0.0, pitch_deg=0.0, distance_m=0.85, target=(0.0, -0.01, 0.0)),
 }
 """Named cameras: the Broekens conditions (frontal / 90-degree lateral from the character's left, 1 m / 3 m,
 all at :data:`STUDY_FOV_DEG`) and ``"portrait"``, which frames the whole head for stimuli and contact sheets."""

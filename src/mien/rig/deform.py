@@ -40,7 +40,7 @@ def _numba_kernels() -> dict[str, Callable[..., Any]]:
     import numba
 
     @numba.njit(cache=True, nogil=True)
-    def blend_one(neutral, weights, offsets, ids, deltas, out):  # type: ignore[no-untyped-def]
+    def blend_one(neutral, weights, offsets, ids, deltas, out):
         out[:, :] = neutral
         for t in range(weights.shape[0]):
             w = weights[t]
@@ -53,7 +53,7 @@ def _numba_kernels() -> dict[str, Callable[..., Any]]:
                 out[v, 2] += w * deltas[k, 2]
 
     @numba.njit(cache=True, nogil=True)
-    def blend_batch(neutral, weights, offsets, ids, deltas, out):  # type: ignore[no-untyped-def]
+    def blend_batch(neutral, weights, offsets, ids, deltas, out):
         for b in range(weights.shape[0]):
             blend_one(neutral, weights[b], offsets, ids, deltas, out[b])
 

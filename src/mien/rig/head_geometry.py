@@ -231,7 +231,7 @@ def _relief(x: np.ndarray, yd: np.ndarray, shape: HeadShape) -> np.ndarray:
     z -= 0.003 * gauss(ax, yd, 0.052, -0.002, 0.010, 0.014)  # temples / outer orbit
     # nose: a ridge whose height and width follow the profile keyframes, plus the alae
     prof_y = np.array([-0.054, -0.050, -0.045, -0.040, -0.035, -0.025, -0.010, 0.004, 0.014])
-    prof_h = np.array([0.000, 0.008, 0.018, 0.025, 0.026, 0.019, 0.0095, 0.003, 0.000])
+    prof_h = np.array([0.000, 0.007, 0.016, 0.0215, 0.0225, 0.017, 0.0090, 0.003, 0.000])
     wid_y = np.array([-0.050, -0.036, -0.020, 0.004])
     wid_s = np.array([0.0085, 0.0080, 0.0058, 0.0046])
     height = _pchip(prof_y, prof_h, yd) * shape.nose_scale

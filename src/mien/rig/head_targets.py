@@ -90,7 +90,7 @@ def lid_weights(mesh: HeadMesh, eye: int) -> tuple[np.ndarray, np.ndarray, np.nd
     shape = mesh.shape
     c = shape.eye_centers[eye]
     x, yd = mesh.material[:, 0], mesh.material[:, 1]
-    skin = (mesh.part == SKIN).astype(float)
+    skin = ((mesh.part == SKIN) & (mesh.vertices[:, 2] > -0.02)).astype(float)  # the face, not the back
     hw = shape.eye_half_width_m
     t = np.clip((x - c[0]) / hw, -1.0, 1.0)
     h_up, h_lo = lid_heights(t, shape)

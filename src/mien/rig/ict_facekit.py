@@ -369,6 +369,6 @@ def load_ict_facekit(
         arrays = _parse(model)
         if cache_file is not None:
             partial = cache_file.with_suffix(f".{os.getpid()}.tmp.npz")
-            np.savez(partial, **arrays)
+            np.savez(partial, **arrays)  # type: ignore[arg-type]
             os.replace(partial, cache_file)
     return _build(arrays, coeffs, "ict-facekit")

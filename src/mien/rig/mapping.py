@@ -73,9 +73,7 @@ class AUMapping:
         return cls._parse(text, "mien:rig/data/au_to_arkit.csv", ARKIT_NAMES)
 
     @classmethod
-    def from_file(
-        cls, path: str | os.PathLike[str], known_targets: Sequence[str] | None = ARKIT_NAMES
-    ) -> AUMapping:
+    def from_file(cls, path: str | os.PathLike[str], known_targets: Sequence[str] | None = ARKIT_NAMES) -> AUMapping:
         """Read a user's table (same columns and comment syntax as the shipped one).
 
         ``known_targets``: the allowed target names, which become :attr:`target_names` in that order (default

@@ -67,9 +67,7 @@ def _check_vertices(rig: Rig, vertices: np.ndarray, batch: bool) -> np.ndarray:
     return v
 
 
-def apply_pose_batch(
-    rig: Rig, vertices: np.ndarray, head_ypr_deg: np.ndarray, gaze_yp_deg: np.ndarray
-) -> np.ndarray:
+def apply_pose_batch(rig: Rig, vertices: np.ndarray, head_ypr_deg: np.ndarray, gaze_yp_deg: np.ndarray) -> np.ndarray:
     """Rotate eyes and head for B frames.
 
     ``vertices``: (B, n_vertices, 3) deformed positions, metres; ``head_ypr_deg``: (B, 3) yaw, pitch, roll;

@@ -16,6 +16,7 @@ import hashlib
 import itertools
 import json
 import os
+import zipfile
 from dataclasses import dataclass, replace
 from functools import cache
 from pathlib import Path
@@ -186,7 +187,7 @@ def load_track(path: str | os.PathLike[str]) -> Track:
             takes=tuple((int(a), int(b)) for a, b in np.asarray(arrays["takes"]).reshape(-1, 2)),
             max_gap_s=float(meta["max_gap_s"]),
         )
-    except (OSError, KeyError, ValueError, json.JSONDecodeError) as exc:
+    except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile) as exc:
         if isinstance(exc, InvalidValueError):
             raise
         raise InvalidValueError("track file", str(file), f"a track written by mien ({exc})") from None
@@ -305,7 +306,7 @@ def track_video(
             cached.unlink(missing_ok=True)  # a damaged cache entry: track again
     raw = _track_frames(path, model_path, min_confidence, info, show_progress)
     if cached is not None:
-        partial = cached.with_suffix(".partial.npz")
+        partial = cached.with_name(f"{cached.stem}.{os.getpid()}.partial.npz")  # atomic publish below
         raw.save(partial)
         partial.replace(cached)
     return apply_gaps(raw, max_gap_s)

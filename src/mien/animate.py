@@ -1,0 +1,46 @@
+"""From face frames to a rig: AU channels -> morph-target weights, pose channels -> head and gaze angles."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mien.errors import InvalidValueError
+from mien.facs.catalogue import FACE_CHANNELS, POSE_CHANNELS
+from mien.facs.clip import Clip
+from mien.rig.model import Rig
+
+__all__ = ["face_to_rig"]
+
+_POSE = [FACE_CHANNELS.index(name) for name in POSE_CHANNELS]
+
+
+def face_to_rig(
+    rig: Rig,
+    frames: Clip | np.ndarray,
+    feature_weights: np.ndarray | None = None,
+    mapping_path: str | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(weights (n, n_targets) float32, poses (n, 5) float64)`` for ``rig`` from (n, 62) face frames.
+
+    Weights come from the AU -> ARKit mapping (the shipped table, or the user table at ``mapping_path``);
+    ``feature_weights`` (n, 54) metres, from a character with the ``"feature_points"`` basis, drive the
+    rig's ``fp_*`` targets when it has them. Poses are head yaw/pitch/roll and gaze yaw/pitch in degrees.
+    """
+    from mien.rig.mapping import AUMapping
+
+    values = frames.values if isinstance(frames, Clip) else np.asarray(frames, dtype=np.float64)
+    if isinstance(frames, Clip) and frames.channels != FACE_CHANNELS:
+        raise InvalidValueError("frames channels", frames.channels[:5], "FACE_CHANNELS (a character's face clip)")
+    if values.ndim != 2 or values.shape[1] != len(FACE_CHANNELS):
+        raise InvalidValueError("frames", values.shape, f"(n_frames, {len(FACE_CHANNELS)})")
+    mapping = AUMapping.from_file(mapping_path) if mapping_path else AUMapping.default()
+    weights = mapping.weights_for(rig).to_weights(values)
+    if feature_weights is not None:
+        from mien.affect.basis import feature_target_names
+
+        names = rig.target_names
+        columns = [names.index(n) if n in names else -1 for n in feature_target_names()]
+        if min(columns) < 0:
+            raise InvalidValueError("rig", rig.name, "a rig with the feature-point targets (feature_points=True)")
+        weights[:, columns] = np.asarray(feature_weights, dtype=np.float32)
+    return weights, values[:, _POSE]

@@ -1,0 +1,54 @@
+"""Options shared by the subcommands that render a head (render, demo): head, identity, camera, size."""
+
+from __future__ import annotations
+
+import argparse
+
+from mien.errors import InvalidValueError
+
+__all__ = ["add_scene_options", "parse_size", "scene_from_args"]
+
+
+def parse_size(text: str) -> tuple[int, int]:
+    """``"512"`` or ``"640x480"`` -> (width, height) pixels."""
+    parts = text.lower().split("x")
+    try:
+        width, height = (int(parts[0]), int(parts[0])) if len(parts) == 1 else (int(parts[0]), int(parts[1]))
+    except ValueError:
+        raise InvalidValueError("size", text, "WIDTHxHEIGHT pixels, e.g. 512x512") from None
+    if len(parts) > 2 or width <= 0 or height <= 0 or width > 8192 or height > 8192:
+        raise InvalidValueError("size", text, "WIDTHxHEIGHT pixels between 1 and 8192")
+    return width, height
+
+
+def add_scene_options(parser: argparse.ArgumentParser, camera: str = "portrait") -> None:
+    """Add head, identity, camera and size options."""
+    parser.add_argument("--head", default="default", help="default (ICT-FaceKit if installed, else builtin), builtin, ict")
+    parser.add_argument("--identity", help="face morphology: builtin 'default'/'b'..., ICT 'mean'/'a'/'b'")
+    parser.add_argument(
+        "--camera",
+        default=camera,
+        help="preset: portrait, frontal-1m, frontal-3m, lateral-1m, lateral-3m (default %(default)s)",
+    )
+    parser.add_argument("--yaw", type=float, help="camera yaw in degrees (90 = the character's left side)")
+    parser.add_argument("--pitch", type=float, help="camera pitch in degrees")
+    parser.add_argument("--distance", type=float, help="camera distance in metres")
+    parser.add_argument("--fov", type=float, help="vertical field of view in degrees")
+    parser.add_argument("--size", default="512x512", help="image size WIDTHxHEIGHT (default %(default)s)")
+    parser.add_argument(
+        "--basis",
+        choices=("facs", "feature-points"),
+        default="facs",
+        help="emotion expression basis: EMFACS AU prototypes, or Broekens' Table 1 feature points",
+    )
+
+
+def scene_from_args(args: argparse.Namespace):  # type: ignore[no-untyped-def]
+    """(rig, camera, size) from the parsed options."""
+    from mien.render.camera import camera_from_options
+    from mien.rig.heads import load_head
+
+    size = parse_size(args.size)
+    camera = camera_from_options(args.camera, args.yaw, args.pitch, args.distance, args.fov)
+    rig = load_head(args.head, args.identity, feature_points=args.basis == "feature-points")
+    return rig, camera, size

@@ -1,0 +1,212 @@
+"""The built-in stylised head: geometry, landmarks, regions and each ARKit target moving the right part."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mien.errors import InvalidValueError, UnknownNameError
+from mien.rig.arkit import ARKIT_NAMES
+from mien.rig.builtin_head import BUILTIN_IDENTITIES, builtin_head, builtin_head_mesh
+from mien.rig.head_geometry import build_head_mesh
+from mien.rig.model import Rig
+
+
+@pytest.fixture(scope="module")
+def rig() -> Rig:
+    return builtin_head()
+
+
+def dense(rig: Rig, name: str) -> np.ndarray:
+    return rig.target(name).dense(rig.n_vertices).astype(np.float64)
+
+
+def moved(rig: Rig, name: str, ids: np.ndarray, tol_m: float = 1e-4) -> float:
+    """Largest displacement (m) of vertices ``ids`` under target ``name`` at weight 1."""
+    d = dense(rig, name)[np.asarray(ids)]
+    return float(np.linalg.norm(d, axis=1).max()) if len(d) else 0.0
+
+
+def test_size_targets_and_frame(rig: Rig) -> None:
+    assert 5_000 <= rig.n_vertices <= 15_000
+    assert rig.target_names == ARKIT_NAMES
+    skin = rig.neutral[rig.regions["skin"]]
+    width = skin[:, 0].max() - skin[:, 0].min()
+    assert 0.14 < width < 0.17
+    face_height = skin[:, 1].max() - rig.neutral[rig.landmarks[8], 1]
+    assert 0.21 < face_height < 0.26
+    np.testing.assert_allclose(rig.eye_centers.mean(axis=0), 0.0, atol=1e-6)
+    assert rig.eye_centers[0, 0] > 0 > rig.eye_centers[1, 0]  # left eye at +x
+    assert rig.vertex_colors is not None and rig.vertex_colors.shape == (rig.n_vertices, 3)
+    assert np.all((rig.vertex_colors >= 0) & (rig.vertex_colors <= 1))
+
+
+def test_deterministic_and_cached() -> None:
+    a, b = build_head_mesh(BUILTIN_IDENTITIES["default"]), build_head_mesh(BUILTIN_IDENTITIES["default"])
+    np.testing.assert_array_equal(a.vertices, b.vertices)
+    np.testing.assert_array_equal(a.faces, b.faces)
+    assert builtin_head() is builtin_head("default")
+
+
+def test_identities_differ() -> None:
+    a, b = builtin_head("default"), builtin_head("b")
+    assert a.name != b.name and b.target_names == ARKIT_NAMES
+    chin_a = a.neutral[a.landmarks[8], 1] - a.neutral[a.landmarks[27], 1]
+    chin_b = b.neutral[b.landmarks[8], 1] - b.neutral[b.landmarks[27], 1]
+    assert chin_b < chin_a - 0.005  # "b" has the longer face
+    np.testing.assert_allclose(b.eye_centers.mean(axis=0), 0.0, atol=1e-6)
+
+
+def test_bad_identity() -> None:
+    with pytest.raises(UnknownNameError, match="nobody"):
+        builtin_head("nobody")
+    with pytest.raises(InvalidValueError, match="identity"):
+        builtin_head(3)  # type: ignore[arg-type]
+
+
+def test_mesh_is_closed_where_it_should_be() -> None:
+    mesh = builtin_head_mesh()
+    edges = np.sort(np.concatenate([mesh.faces[:, [0, 1]], mesh.faces[:, [1, 2]], mesh.faces[:, [2, 0]]]), axis=1)
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    assert counts.max() <= 2  # manifold: no edge shared by three triangles
+    # lips are separate vertices along the slit except the shared corners
+    up, lo = mesh.mouth_seam["upper"], mesh.mouth_seam["lower"]
+    assert up[0] == lo[0] and up[-1] == lo[-1]
+    assert not set(up[1:-1].tolist()) & set(lo[1:-1].tolist())
+    np.testing.assert_allclose(mesh.vertices[up[1:-1]], mesh.vertices[lo[1:-1]], atol=1e-9)  # closed at rest
+
+
+def test_landmarks_plausible(rig: Rig) -> None:
+    p = rig.neutral[rig.landmarks]
+    eyes_y = p[36:48, 1].mean()
+    assert eyes_y > p[30, 1] > p[51, 1] > p[57, 1] > p[8, 1]  # eyes > nose tip > upper lip > lower lip > chin
+    assert p[17:27, 1].min() > p[36:48, 1].max()  # brows above the eyes
+    for right, left in ((0, 16), (17, 26), (21, 22), (36, 45), (39, 42), (31, 35), (48, 54)):
+        assert p[left, 0] > 0 > p[right, 0]  # iBUG "right" is the character's right: -x
+        assert abs(p[left, 0] + p[right, 0]) < 2e-3  # symmetric
+    assert np.all(np.diff(p[0:17, 0]) > 0)  # jaw line from the character's right to the left
+    assert p[30, 2] == p[:, 2].max()  # nose tip is the most forward point
+    assert p[37, 1] > p[41, 1] and p[43, 1] > p[47, 1]  # upper lids above lower lids
+    assert len(set(rig.landmarks.tolist())) >= 60
+
+
+def test_regions(rig: Rig) -> None:
+    for name in ("eye_L", "eye_R", "head", "skin", "lips", "teeth", "brows", "upper_lip", "lower_lip",
+                 "upper_lid_L", "upper_lid_R", "lower_lid_L", "lower_lid_R", "tongue"):  # fmt: skip
+        assert len(rig.regions[name]) > 0, name
+    assert len(rig.regions["head"]) == rig.n_vertices
+    assert rig.neutral[rig.regions["eye_L"], 0].mean() > 0 > rig.neutral[rig.regions["eye_R"], 0].mean()
+    assert not set(rig.regions["upper_lip"].tolist()) & set(rig.regions["lower_lip"].tolist())
+
+
+def test_eye_blink_closes_left_eye_only(rig: Rig) -> None:
+    d = dense(rig, "eyeBlinkLeft")
+    mesh = builtin_head_mesh()
+    up, lo = mesh.eye_seams[0]["upper"], mesh.eye_seams[0]["lower"]
+    closed = rig.neutral[up] + d[up]
+    gap_closed = np.abs(closed[:, 1] - (rig.neutral[lo, 1] + d[lo, 1])).max()
+    gap_open = np.abs(rig.neutral[up, 1] - rig.neutral[lo, 1]).max()
+    assert gap_open > 0.008 and gap_closed < 0.001
+    for region in ("eye_R", "upper_lid_R", "lower_lid_R", "lips", "eye_L"):
+        assert moved(rig, "eyeBlinkLeft", rig.regions[region]) < 1e-6, region
+    # the closed lid stays in front of the eyeball, also half-way
+    centre, radius = rig.eye_centers[0], 0.012
+    lid_ids = rig.regions["upper_lid_L"]
+    lid_ids = lid_ids[np.linalg.norm(rig.neutral[lid_ids] - centre, axis=1) > radius]  # not the tucked-in rim
+    for w in (0.5, 1.0):
+        lid = rig.neutral[lid_ids] + w * d[lid_ids]
+        assert np.linalg.norm(lid - centre, axis=1).min() > radius
+
+
+def test_smile_moves_left_corner_up_and_out(rig: Rig) -> None:
+    corner_l, corner_r = rig.landmarks[54], rig.landmarks[48]
+    d = dense(rig, "mouthSmileLeft")
+    assert d[corner_l, 1] > 0.007 and d[corner_l, 0] > 0.004
+    assert 0.008 < np.linalg.norm(d[corner_l]) < 0.014  # about 1 cm
+    assert np.linalg.norm(d[corner_r]) < 1e-4
+    assert moved(rig, "mouthSmileLeft", np.concatenate([rig.regions["eye_L"], rig.regions["brows"]])) < 1e-4
+    d = dense(rig, "mouthSmileRight")
+    assert d[corner_r, 1] > 0.007 and d[corner_r, 0] < -0.004
+
+
+def test_jaw_open(rig: Rig) -> None:
+    d = dense(rig, "jawOpen")
+    assert d[rig.landmarks[8], 1] < -0.015  # chin down
+    opening = d[rig.landmarks[66], 1] - d[rig.landmarks[62], 1]
+    assert -0.032 < opening < -0.02  # the mouth opens 2-3 cm
+    upper_lip = rig.regions["upper_lip"]
+    assert moved(rig, "jawOpen", upper_lip[np.abs(rig.neutral[upper_lip, 0]) < 0.015]) < 1e-4
+    assert moved(rig, "jawOpen", rig.regions["teeth_upper"]) == 0.0
+    assert dense(rig, "jawOpen")[rig.regions["teeth_lower"], 1].max() < -0.01
+    assert moved(rig, "jawOpen", np.concatenate([rig.regions["eye_L"], rig.regions["brows"]])) == 0.0
+
+
+def test_brow_inner_up(rig: Rig) -> None:
+    d = dense(rig, "browInnerUp")
+    assert d[rig.landmarks[21], 1] > 0.005 and d[rig.landmarks[22], 1] > 0.005
+    assert d[rig.landmarks[26], 1] < d[rig.landmarks[22], 1]  # inner more than outer
+    assert moved(rig, "browInnerUp", np.concatenate([rig.regions["lips"], rig.regions["lower_lid_L"]])) < 2e-4
+
+
+def test_lateral_targets_stay_on_their_side(rig: Rig) -> None:
+    x = rig.neutral[:, 0]
+    for name in ARKIT_NAMES:
+        if not name.endswith(("Left", "Right")) or name in ("jawLeft", "jawRight", "mouthLeft", "mouthRight"):
+            continue
+        d = np.linalg.norm(dense(rig, name), axis=1)
+        wrong = x < -0.01 if name.endswith("Left") else x > 0.01
+        assert d[wrong].max() < 0.25 * d.max(), name
+
+
+def test_each_target_moves_its_part(rig: Rig) -> None:
+    lm = rig.landmarks
+    expect = {
+        "eyeLookUpLeft": (rig.regions["eye_L"], 1, +1),
+        "eyeLookDownRight": (rig.regions["eye_R"], 1, -1),
+        "eyeLookOutLeft": (rig.regions["eye_L"], 0, +1),
+        "eyeLookInLeft": (rig.regions["eye_L"], 0, -1),
+        "eyeLookInRight": (rig.regions["eye_R"], 0, +1),
+        "eyeWideLeft": ([lm[43], lm[44]], 1, +1),
+        "eyeSquintLeft": ([lm[46], lm[47]], 1, +1),
+        "browDownLeft": ([lm[24]], 1, -1),
+        "browOuterUpRight": ([lm[17]], 1, +1),
+        "cheekSquintLeft": (lm[[14]] * 0 + builtin_landmark_cheek(rig, +1), 1, +1),
+        "noseSneerLeft": ([lm[35]], 1, +1),
+        "mouthFrownLeft": ([lm[54]], 1, -1),
+        "mouthStretchRight": ([lm[48]], 0, -1),
+        "mouthLowerDownLeft": ([lm[56]], 1, -1),
+        "mouthUpperUpRight": ([lm[50]], 1, +1),
+        "mouthPucker": ([lm[51], lm[57]], 2, +1),
+        "mouthFunnel": ([lm[51], lm[57]], 2, +1),
+        "mouthLeft": ([lm[51], lm[57]], 0, +1),
+        "mouthRight": ([lm[51], lm[57]], 0, -1),
+        "mouthRollLower": ([lm[57]], 2, -1),
+        "mouthShrugLower": ([lm[8] * 0 + lm[57]], 1, +1),
+        "jawForward": ([lm[8]], 2, +1),
+        "jawLeft": ([lm[8]], 0, +1),
+        "jawRight": ([lm[8]], 0, -1),
+        "cheekPuff": ([builtin_landmark_cheek(rig, +1)[0] + 0], 2, +1),
+        "tongueOut": (rig.regions["tongue"], 2, +1),
+    }
+    for name, (ids, axis, sign) in expect.items():
+        d = dense(rig, name)[np.asarray(ids)]
+        assert (sign * d[:, axis]).max() > 5e-4, name
+    for name in ARKIT_NAMES:
+        assert np.abs(dense(rig, name)).max() < 0.04, name  # nothing flies off
+
+
+def builtin_landmark_cheek(rig: Rig, side: int) -> np.ndarray:
+    """The skin vertex nearest a point on the cheek, below the eye."""
+    skin = rig.regions["skin"]
+    target = np.array([side * 0.036, -0.03])
+    front = skin[rig.neutral[skin, 2] > 0.0]
+    return np.array([front[np.argmin(np.linalg.norm(rig.neutral[front, :2] - target, axis=1))]])
+
+
+def test_eye_look_is_a_rotation(rig: Rig) -> None:
+    ids = rig.regions["eye_L"]
+    after = rig.neutral[ids] + dense(rig, "eyeLookUpLeft")[ids]
+    r0 = np.linalg.norm(rig.neutral[ids] - rig.eye_centers[0], axis=1)
+    r1 = np.linalg.norm(after - rig.eye_centers[0], axis=1)
+    np.testing.assert_allclose(r0, r1, atol=1e-6)
+    assert moved(rig, "eyeLookUpLeft", rig.regions["eye_R"]) == 0.0
