@@ -14,9 +14,9 @@ import time
 os.environ.setdefault("OMP_NUM_THREADS", "1")  # "on one core"
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-import numpy as np  # noqa: E402
+import numpy as np
 
-from mien.character import Character, CharacterBatch  # noqa: E402
+from mien.character import Character, CharacterBatch
 
 FPS = 60.0
 N_BATCH = 1000

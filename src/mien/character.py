@@ -29,11 +29,11 @@ from mien.affect.emotions import Blend, blend_components, check_intensity
 from mien.affect.engine import EmotionEngine, mood_step, shown_mood
 from mien.affect.envelope import Envelope, envelope_values
 from mien.errors import InvalidValueError
-from mien.facs.catalogue import FACE_CHANNELS, POSE_CHANNELS
+from mien.facs.catalogue import FACE_CHANNELS, POSE_CHANNELS, au_channels
 from mien.facs.clip import Clip
 from mien.facs.dynamics import FacsEngine, TimedAction, time_constant_from_speed
 from mien.facs.idle import Idle, IdleBatch, IdleSettings
-from mien.facs.intensity import AUSpec
+from mien.facs.intensity import AUSpec, parse_au
 
 __all__ = ["EXPRESSION_BASES", "Character", "CharacterBatch"]
 
@@ -239,7 +239,7 @@ class Character:
             raise InvalidValueError("duration_s", duration_s, "a positive number of seconds")
         if not (math.isfinite(fps) and fps > 0):
             raise InvalidValueError("fps", fps, "a positive frame rate")
-        n_frames = max(1, int(round(duration_s * fps)))
+        n_frames = max(1, round(duration_s * fps))
         start = self._t_s
         values = np.empty((n_frames, _N))
         features = np.empty((n_frames, self.feature_weights.shape[0])) if self.expression_basis != "facs" else None
@@ -313,15 +313,18 @@ class CharacterBatch:
         """Number of characters."""
         return int(self.seeds.shape[0])
 
-    def set_au(self, characters: np.ndarray | slice | int, au: str, intensity: float, tau_s: float | None = None) -> None:
+    def set_au(
+        self, characters: np.ndarray | slice | int, au: str, intensity: float, tau_s: float | None = None
+    ) -> None:
         """Hold ``au`` at ``intensity`` on the selected characters (index array, slice or int)."""
+        spec = parse_au(au)
         probe = FacsEngine(tick_hz=self.tick_hz)
-        probe.set(au, intensity, tau_s)  # validates and converts head/eye codes to degrees
-        changed = np.flatnonzero((probe.target != 0.0) | (probe.tau_s != FacsEngine().tau_s))
+        probe.set(spec, intensity, tau_s)  # validates and converts head/eye codes to degrees
+        channels = np.array(au_channels(spec.code, spec.side))
         rows = np.atleast_1d(np.arange(self.n_characters)[characters])[:, None]
-        self.target[rows, changed] = probe.target[changed]
+        self.target[rows, channels] = probe.target[channels]
         if tau_s is not None:
-            self.tau_s[rows, changed] = probe.tau_s[changed]
+            self.tau_s[rows, channels] = probe.tau_s[channels]
             self._decay_dt = -1.0
 
     def set_speed(self, characters: np.ndarray | slice | int, speed: float) -> None:
@@ -396,7 +399,7 @@ class CharacterBatch:
     def step(self, t_s: float) -> np.ndarray:
         """(n, 62) face frames at ``t_s`` (>= the previous time); the array is reused by the next step."""
         last = self._t_s
-        dt = 0.0 if last is None else t_s - last
+        dt = t_s - (0.0 if last is None else last)  # the FACS layer starts at t = 0, like Character's
         if not dt >= 0.0:
             raise InvalidValueError("t_s", t_s, f"a time >= the previous time {last}")
         if dt > 0.0:

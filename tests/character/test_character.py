@@ -125,3 +125,12 @@ def test_bad_commands_raise_typed_errors():
     c.step(1.0)
     with pytest.raises(InvalidValueError, match="t_s"):
         c.step(0.5)
+
+
+def test_batch_set_au_back_to_zero_relaxes_the_face():
+    batch = CharacterBatch(np.array([1, 2]), idle=False)
+    batch.set_au(slice(None), "AU12", 4.0, tau_s=0.0)
+    assert batch.step(0.1)[:, AU["AU12L"]].tolist() == [4.0, 4.0]
+    batch.set_au(1, "AU12", 0.0)
+    frames = batch.step(5.0)
+    assert frames[0, AU["AU12L"]] == 4.0 and frames[1, AU["AU12L"]] == 0.0

@@ -27,11 +27,11 @@ def test_csv_is_readable_by_column_name(tmp_path):
 
 
 def test_unknown_suffix_and_malformed_files(tmp_path):
-    with pytest.raises(UnknownNameError, match=".xyz"):
+    with pytest.raises(UnknownNameError, match=r"\.xyz"):
         writer_for("curves.xyz")
     bad = tmp_path / "bad.csv"
     bad.write_text("time_s,AU12L\n0.0,abc\n")
-    with pytest.raises(InvalidValueError, match="bad.csv"):
+    with pytest.raises(InvalidValueError, match=r"bad\.csv"):
         reader_for(bad)(bad)
     nohead = tmp_path / "nohead.csv"
     nohead.write_text("a,b\n1,2\n")

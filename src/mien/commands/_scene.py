@@ -23,7 +23,9 @@ def parse_size(text: str) -> tuple[int, int]:
 
 def add_scene_options(parser: argparse.ArgumentParser, camera: str = "portrait") -> None:
     """Add head, identity, camera and size options."""
-    parser.add_argument("--head", default="default", help="default (ICT-FaceKit if installed, else builtin), builtin, ict")
+    parser.add_argument(
+        "--head", default="default", help="default (ICT-FaceKit if installed, else builtin), builtin, ict"
+    )
     parser.add_argument("--identity", help="face morphology: builtin 'default'/'b'..., ICT 'mean'/'a'/'b'")
     parser.add_argument(
         "--camera",

@@ -37,7 +37,7 @@ def run(args: argparse.Namespace) -> int:
     specs = [parse_au(text) for text in args.aus]  # all validated before anything runs
     character = Character(seed=args.seed, idle=not args.no_idle)
     fps = args.fps
-    n_before = max(0, int(round(args.start * fps)))
+    n_before = max(0, round(args.start * fps))
     if args.play:
         onset, apex, offset = args.play
         for spec in specs:

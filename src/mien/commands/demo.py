@@ -23,7 +23,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
         "blends enthusiastic, furious, frustrated and evil (Broekens et al.), with blinks and idle motion, "
         "rendered on the default head (ICT-FaceKit if installed, else the built-in head).",
     )
-    parser.add_argument("-o", "--out", type=Path, default=Path("mien-output"), help="output folder (default %(default)s)")
+    parser.add_argument(
+        "-o", "--out", type=Path, default=Path("mien-output"), help="output folder (default %(default)s)"
+    )
     parser.add_argument("--intensity", type=float, default=1.0, help="emotion intensity (default %(default)s)")
     parser.add_argument("--fps", type=float, default=30.0, help="frames per second (default %(default)s)")
     parser.add_argument("--seed", type=int, default=0, help="idle-behaviour seed")
@@ -66,7 +68,7 @@ def run(args: argparse.Namespace) -> int:
     curves = write_csv(clip, out / "demo_curves.csv")
     plot = plot_clip(clip, out / "demo_curves.png", title="mien demo: AU curves", events=[(t, n) for t, n in peaks])
     weights, poses = face_to_rig(rig, clip, features)
-    peak_frames = {min(clip.n_frames - 1, int(round(t * clip.fps))): name for t, name in peaks}
+    peak_frames = {min(clip.n_frames - 1, round(t * clip.fps)): name for t, name in peaks}
     stills: dict[str, object] = {}
     video = out / "demo.mp4"
     with make_renderer(rig, camera, size) as renderer:

@@ -141,7 +141,7 @@ def au_channels(code: int, side: str | None = None) -> tuple[int, ...]:
         return (_CHANNEL_INDEX[au.channel],)
     if not au.lateral:
         if side is not None:
-            raise UnknownNameError("action unit side", f"{side}{code}", ("AU%d has no left/right variant" % code,))
+            raise UnknownNameError("action unit side", f"{side}{code}", (f"AU{code} has no left/right variant",))
         return (_CHANNEL_INDEX[f"AU{code}"],)
     if side is None:
         return (_CHANNEL_INDEX[f"AU{code}L"], _CHANNEL_INDEX[f"AU{code}R"])

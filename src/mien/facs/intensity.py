@@ -52,7 +52,7 @@ def intensity_letter(value: float) -> str:
     value = check_intensity(value)
     if value < 0.5:
         return ""
-    return "ABCDE"[min(4, int(round(value)) - 1)]
+    return "ABCDE"[min(4, round(value) - 1)]
 
 
 @dataclass(frozen=True)

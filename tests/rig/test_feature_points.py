@@ -1,0 +1,198 @@
+"""Broekens' feature-point rig: anchors, geodesic regions, compiled targets and Table 1 on real heads."""
+
+from __future__ import annotations
+
+import csv
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mien.errors import InvalidValueError, UnknownNameError
+from mien.rig.builtin_head import builtin_head
+from mien.rig.feature_points import (
+    FEATURE_NAMES,
+    FeaturePointRig,
+    feature_specs,
+    feature_target_names,
+    table1_weights,
+)
+from mien.rig.geodesic import EdgeGraph
+from mien.rig.model import MorphTarget, Rig
+
+TABLE1 = Path(__file__).resolve().parents[2] / "src/mien/affect/data/broekens_table1.csv"
+
+
+def table1(emotion: str) -> np.ndarray:
+    """(18, 3) Table 1 column ``emotion`` as printed, [z, x, y] metres, read straight from the csv."""
+    lines = [line for line in TABLE1.read_text().splitlines() if not line.startswith("#")]
+    rows = {row["feature"]: row[emotion] for row in csv.DictReader(lines)}
+    return np.array([[float(v) for v in rows[name].split()] for name in FEATURE_NAMES])
+
+
+@pytest.fixture(scope="module", params=["default", "b"])
+def head(request: pytest.FixtureRequest) -> tuple[Rig, FeaturePointRig]:
+    rig = builtin_head(request.param)
+    fp = FeaturePointRig.build(rig)
+    return rig.with_targets(fp.compile()), fp
+
+
+def deform(rig: Rig, weights: dict[str, float]) -> np.ndarray:
+    """(n, 3) displacement of ``rig`` at target ``weights``."""
+    out = np.zeros((rig.n_vertices, 3))
+    for name, w in weights.items():
+        out += w * rig.target(name).dense(rig.n_vertices)
+    return out
+
+
+def test_names_and_table_order() -> None:
+    assert FEATURE_NAMES[:3] == ("Jaw", "Nostrils", "LipLowerLeft") and FEATURE_NAMES[-1] == "BrowOuterRight"
+    assert len(FEATURE_NAMES) == 18
+    lines = [line for line in TABLE1.read_text().splitlines() if not line.startswith("#")]
+    assert tuple(row["feature"] for row in csv.DictReader(lines)) == FEATURE_NAMES
+    assert len(feature_target_names()) == 54 and feature_target_names()[0] == "fp_Jaw_x"
+    for spec in feature_specs():
+        assert 0 <= spec.plateau_m < spec.radius_m and all(0 <= i < 68 for i in spec.landmarks)
+
+
+def test_anchor_sides_and_weights(head: tuple[Rig, FeaturePointRig]) -> None:
+    rig, fp = head
+    p = rig.neutral[fp.anchors]
+    for name in FEATURE_NAMES:
+        i = FEATURE_NAMES.index(name)
+        if name.endswith("Left"):
+            assert p[i, 0] > 0.005, name
+            j = FEATURE_NAMES.index(name.replace("Left", "Right"))
+            assert p[j, 0] < -0.005 and abs(p[i, 0] + p[j, 0]) < 2e-3 and abs(p[i, 1] - p[j, 1]) < 2e-3, name
+        w = fp.weights(name, rig.n_vertices)
+        assert w[fp.anchors[i]] == 1.0 and w.max() == 1.0 and w.min() >= 0.0
+    y = dict(zip(FEATURE_NAMES, p[:, 1], strict=True))
+    assert y["BrowInnerLeft"] > y["LidUpperLeft"] > y["LidLowerLeft"] > y["CheekLeft"] > y["Nostrils"]
+    assert y["Nostrils"] > y["LipUpperLeft"] > y["LipLowerLeft"] > y["Jaw"]
+
+
+def test_compiled_targets_are_unit_moves(head: tuple[Rig, FeaturePointRig]) -> None:
+    rig, fp = head
+    assert rig.target_names[-54:] == feature_target_names()
+    t = rig.target("fp_LipCornerLeft_y")
+    anchor = fp.anchors[FEATURE_NAMES.index("LipCornerLeft")]
+    dense = t.dense(rig.n_vertices)
+    np.testing.assert_array_equal(dense[anchor], [0.0, 1.0, 0.0])
+    assert np.all(dense[:, [0, 2]] == 0.0)
+
+
+def test_anchor_moves_exactly_by_the_vector(head: tuple[Rig, FeaturePointRig]) -> None:
+    rig, fp = head
+    for emotion in ("happy", "surprise", "angry", "disgust"):
+        vectors = table1(emotion)
+        for f, name in enumerate(FEATURE_NAMES):  # each feature alone moves its anchor by exactly its vector
+            alone = np.zeros_like(vectors)
+            alone[f] = vectors[f]
+            d = deform(rig, table1_weights(alone, 1.2))
+            z, x, y = vectors[f]
+            np.testing.assert_allclose(d[fp.anchors[f]], 1.2 * np.array([x, -y, z]), atol=1e-6, err_msg=name)
+        d = deform(rig, table1_weights(vectors, 1.2))  # overlapping regions add up, as in the paper
+        np.testing.assert_allclose(fp.displacement(vectors, 1.2, rig.n_vertices), d, atol=1e-6)
+
+
+def test_happy_lifts_both_corners_outward(head: tuple[Rig, FeaturePointRig]) -> None:
+    rig, _ = head
+    d = deform(rig, table1_weights(table1("happy"), 1.0))
+    left, right = rig.landmarks[54], rig.landmarks[48]
+    assert d[left, 1] > 0.005 and d[right, 1] > 0.005  # up
+    assert d[left, 0] > 0.005 and d[right, 0] < -0.005  # outward: +x on the character's left
+
+
+def test_surprise_raises_brows_and_drops_jaw(head: tuple[Rig, FeaturePointRig]) -> None:
+    rig, _ = head
+    d = deform(rig, table1_weights(table1("surprise"), 1.0))
+    for brow in (17, 21, 22, 26):
+        assert d[rig.landmarks[brow], 1] > 0.003
+    assert d[rig.landmarks[8], 1] < -0.009
+    assert d[rig.landmarks[57], 1] < -0.005  # the lower lip goes with the jaw: the mouth opens
+    assert abs(d[rig.landmarks[51], 1]) < 0.0025
+
+
+def test_angry_pulls_inner_brows_together_and_down(head: tuple[Rig, FeaturePointRig]) -> None:
+    rig, _ = head
+    d = deform(rig, table1_weights(table1("angry"), 1.0))
+    assert d[rig.landmarks[22], 0] < -0.005 < 0.005 < d[rig.landmarks[21], 0]
+    assert d[rig.landmarks[22], 1] < -0.005
+
+
+def test_regions_respect_mouth_and_lids(head: tuple[Rig, FeaturePointRig]) -> None:
+    rig, fp = head
+    lower_lip = rig.regions["lower_lip"]
+    upper_lip = rig.regions["upper_lip"]
+    for name in ("LipUpperLeft", "LipUpperRight", "Nostrils"):
+        assert fp.weights(name, rig.n_vertices)[lower_lip].max() < 0.02, name
+    for name in ("LipLowerLeft", "LipLowerRight", "Jaw"):
+        central = upper_lip[np.abs(rig.neutral[upper_lip, 0]) < 0.015]
+        assert fp.weights(name, rig.n_vertices)[central].max() < 0.02, name
+    for side in ("Left", "Right"):
+        letter = side[0]
+        assert fp.weights(f"LidUpper{side}", rig.n_vertices)[rig.regions[f"lower_lid_{letter}"]].max() < 0.02
+        assert fp.weights(f"LidLower{side}", rig.n_vertices)[rig.regions[f"upper_lid_{letter}"]].max() < 0.02
+        for name in (f"LidUpper{side}", f"BrowInner{side}"):
+            assert fp.weights(name, rig.n_vertices)[rig.regions[f"eye_{letter}"]].max() == 0.0
+
+
+def test_radii_override_and_bad_input() -> None:
+    rig = builtin_head()
+    small = FeaturePointRig.build(rig, radii={"CheekLeft": 0.01})
+    big = FeaturePointRig.build(rig)
+    i = FEATURE_NAMES.index("CheekLeft")
+    assert len(small.region_ids[i]) < len(big.region_ids[i]) and small.radii_m[i] == 0.01
+    with pytest.raises(UnknownNameError, match="Ear"):
+        FeaturePointRig.build(rig, radii={"Ear": 0.01})
+    with pytest.raises(InvalidValueError, match="radii"):
+        FeaturePointRig.build(rig, radii={"Jaw": -1.0})
+    with pytest.raises(InvalidValueError, match="vectors_zxy"):
+        table1_weights(np.zeros((17, 3)), 1.0)
+    with pytest.raises(InvalidValueError, match="intensity"):
+        table1_weights(np.zeros((18, 3)), float("nan"))
+
+
+def test_geodesic_distances_follow_edges() -> None:
+    # a 3x1 strip of unit squares: distance along the strip, and no path to an isolated triangle
+    v = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0], [1, 1, 0], [2, 1, 0], [5, 5, 0], [6, 5, 0], [5, 6, 0]])
+    f = np.array([[0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4], [6, 7, 8]])
+    g = EdgeGraph.from_mesh(v.astype(float), f)
+    d = g.distances([0])
+    np.testing.assert_allclose(d[[0, 1, 2, 3]], [0, 1, 2, 1])
+    assert np.isinf(d[6:]).all()
+    np.testing.assert_allclose(g._distances_heap(np.array([0]), np.inf), d)
+    assert g.component([7]).tolist() == [False] * 6 + [True] * 3
+    assert np.isinf(g.distances([0], limit_m=1.5)[2])
+
+
+def test_user_mesh_with_landmarks() -> None:
+    """Any mesh with a landmark map is instrumented: a rig rebuilt from bare arrays gets the same anchors."""
+    head = builtin_head()
+    bare = Rig("user", head.neutral, head.faces, (), head.landmarks)
+    fp = FeaturePointRig.build(bare)
+    np.testing.assert_array_equal(fp.anchors, FeaturePointRig.build(head).anchors)
+    assert all(isinstance(t, MorphTarget) for t in fp.compile())
+
+
+def test_ict_head(ict_dir: Path, tmp_path_factory: pytest.TempPathFactory) -> None:
+    ict_facekit = pytest.importorskip("mien.rig.ict_facekit")
+    with pytest.MonkeyPatch.context() as patch:
+        if "MIEN_CACHE_DIR" not in os.environ:
+            patch.setenv("MIEN_CACHE_DIR", str(tmp_path_factory.getbasetemp() / "mien-cache"))
+        rig = ict_facekit.load_ict_facekit(ict_dir)
+    fp = FeaturePointRig.build(rig)
+    rig = rig.with_targets(fp.compile())
+    happy = deform(rig, table1_weights(table1("happy"), 1.0))
+    left, right = rig.landmarks[54], rig.landmarks[48]
+    assert happy[left, 1] > 0.004 and happy[right, 1] > 0.004
+    assert happy[left, 0] > 0.004 and happy[right, 0] < -0.004
+    surprise = deform(rig, table1_weights(table1("surprise"), 1.0))
+    assert surprise[rig.landmarks[8], 1] < -0.009 and surprise[rig.landmarks[[17, 21, 22, 26]], 1].min() > 0.003
+    p = rig.neutral[fp.anchors]
+    assert p[FEATURE_NAMES.index("LipCornerLeft"), 0] > 0 > p[FEATURE_NAMES.index("LipCornerRight"), 0]
+    # the upper lip anchor leaves the lower lip where it is
+    upper = fp.weights("LipUpperLeft", rig.n_vertices)
+    assert upper[rig.landmarks[[56, 57, 65, 66]]].max() < 0.02
+    assert fp.weights("LidUpperLeft", rig.n_vertices)[rig.landmarks[[46, 47]]].max() < 0.02
