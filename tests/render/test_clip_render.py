@@ -126,3 +126,22 @@ def test_ict_head_renders_with_eyes_and_lips(ict_dir: Path) -> None:
     cheek_x, cheek_y = camera.project(rig.neutral[rig.landmarks[2]] * np.float32([0.7, 1, 1]), 256, 256)[0]
     cheek = image[int(cheek_y), int(cheek_x)].astype(int)
     assert lip[0] - lip[1] > cheek[0] - cheek[1]
+
+
+def test_render_failure_midway_keeps_a_partial_mp4(rig: Rig, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from mien.render.offscreen import OffscreenRenderer
+
+    original = OffscreenRenderer.render
+    calls = []
+
+    def flaky(self: OffscreenRenderer, vertices: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        calls.append(1)
+        if len(calls) == 5:
+            raise MemoryError("out of memory at frame 5")
+        return original(self, vertices, out)
+
+    monkeypatch.setattr(OffscreenRenderer, "render", flaky)
+    with pytest.raises(MemoryError):
+        render_clip(rig, jaw_weights(rig, 10), tmp_path / "clip.mp4", 25, CAMERA_PRESETS["frontal-1m"], (64, 64))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["clip.partial.mp4"]
+    assert read_video_info(tmp_path / "clip.partial.mp4").n_frames == 4

@@ -187,8 +187,10 @@ def _regions(mesh: HeadMesh) -> dict[str, np.ndarray]:
     masks = {k: np.zeros(len(part)) for k in ("lips", "brows", "hair")}
     for name, w in skin_masks(mesh.vertices[skin], mesh.material[skin], mesh.shape).items():
         masks[name][skin] = w
-    lips = (masks["lips"] > 0.5) | np.isin(np.arange(len(part)), mesh.mouth_seam["upper"]) | np.isin(
-        np.arange(len(part)), mesh.mouth_seam["lower"]
+    lips = (
+        (masks["lips"] > 0.5)
+        | np.isin(np.arange(len(part)), mesh.mouth_seam["upper"])
+        | np.isin(np.arange(len(part)), mesh.mouth_seam["lower"])
     )
     regions = {
         "eye_L": ids(part == EYE_L),

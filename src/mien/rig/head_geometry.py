@@ -15,6 +15,7 @@ identities can differ in face length. Only numpy is used; generation is determin
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -307,7 +308,7 @@ class _Builder:
 def _grid_faces(rows: list[np.ndarray]) -> np.ndarray:
     """Triangles joining consecutive id rows (top to bottom, columns left to right); drops degenerate ones."""
     out = []
-    for top, bottom in zip(rows[:-1], rows[1:], strict=True):
+    for top, bottom in itertools.pairwise(rows):
         a, b, c, d = top[:-1], bottom[:-1], top[1:], bottom[1:]
         out += [np.stack([a, b, c], 1), np.stack([c, b, d], 1)]
     tri = np.vstack(out)
@@ -498,13 +499,13 @@ def build_head_mesh(shape: HeadShape) -> HeadMesh:
     b.add(cav, sphere_faces[:, ::-1], dark, CAVITY, cav[:, :2])
 
     # Teeth: an elliptic tube swept along a parabolic dental arch, with faint gaps between teeth.
-    for part, y_mid, back in ((TEETH_UPPER, ym + 0.0018, 0.0), (TEETH_LOWER, ym - 0.0040, 0.0025)):
-        a = np.linspace(-1, 1, 41)
+    for part, y_mid, set_back in ((TEETH_UPPER, ym + 0.0018, 0.0), (TEETH_LOWER, ym - 0.0040, 0.0025)):
+        arch = np.linspace(-1, 1, 41)
         ang = np.linspace(0, 2 * np.pi, 10, endpoint=False)
         wt, dt = mw * 0.78, 0.020
-        z0 = z_lips - 0.0095 - back
-        px, pz = wt * a, z0 - dt * a**2
-        tx, tz = wt * np.ones_like(a), -2 * dt * a
+        z0 = z_lips - 0.0095 - set_back
+        px, pz = wt * arch, z0 - dt * arch**2
+        tx, tz = wt * np.ones_like(arch), -2 * dt * arch
         tn = np.hypot(tx, tz)
         nx, nz = -tz / tn, tx / tn  # outward-facing normal of the arch (toward the lips)
         hx = 0.0016 * np.cos(ang)
@@ -512,15 +513,15 @@ def build_head_mesh(shape: HeadShape) -> HeadMesh:
         pts = np.stack(
             [
                 px[:, None] + nx[:, None] * hx[None, :],
-                y_mid + np.broadcast_to(hy[None, :], (len(a), len(ang))),
+                y_mid + np.broadcast_to(hy[None, :], (len(arch), len(ang))),
                 pz[:, None] + nz[:, None] * hx[None, :],
             ],
             axis=-1,
         ).reshape(-1, 3)
-        ids = np.arange(len(a) * len(ang)).reshape(len(a), len(ang))
-        ring_ids = np.concatenate([ids, ids[:, :1]], axis=1)
+        tube = np.arange(len(arch) * len(ang)).reshape(len(arch), len(ang))
+        ring_ids = np.concatenate([tube, tube[:, :1]], axis=1)
         tri = _grid_faces([r for r in ring_ids])
-        gap = 0.72 + 0.28 * np.abs(np.sin(np.pi * (a * 4.6 + 0.5))) ** 0.25
+        gap = 0.72 + 0.28 * np.abs(np.sin(np.pi * (arch * 4.6 + 0.5))) ** 0.25
         white = srgb_to_linear((0.95, 0.93, 0.86))
         col = np.repeat(white[None, :] * gap[:, None], len(ang), axis=0)
         b.add(pts, tri, col, part, pts[:, :2])
@@ -633,7 +634,7 @@ def skin_masks(v: np.ndarray, m: np.ndarray, shape: HeadShape) -> dict[str, np.n
     t = (ax - 0.012) / 0.044
     brow_y = 0.021 + 0.007 * np.sin(np.pi * np.clip(t, 0, 1) * 0.85) - 0.003 * np.clip(t, 0, 1)
     thick = 0.0060 * (1.0 - 0.45 * np.clip(t, 0, 1))
-    brows = (1 - smoothstep(0.6, 1.0, np.abs(yd - brow_y) / thick)) * smoothstep(-0.08, 0.05, t)
+    brows = (1 - smoothstep(0.4, 1.1, np.abs(yd - brow_y) / thick)) * smoothstep(-0.08, 0.05, t)
     brows *= (1 - smoothstep(0.95, 1.08, t)) * (v[:, 2] > -0.03)
     # painted hair: above a hairline that drops from the forehead to the nape
     c = (v[:, 2] - Z_CENTRE) / np.maximum(np.hypot(v[:, 0], v[:, 2] - Z_CENTRE), 1e-9)

@@ -58,7 +58,9 @@ def _rot_y(p: np.ndarray, pivot: np.ndarray, angle: np.ndarray) -> np.ndarray:
     return out + pivot
 
 
-def _gauss_asym(x: np.ndarray, y: np.ndarray, cx: float, cy: float, sx: float, s_up: float, s_down: float) -> np.ndarray:
+def _gauss_asym(
+    x: np.ndarray, y: np.ndarray, cx: float, cy: float, sx: float, s_up: float, s_down: float
+) -> np.ndarray:
     sy = np.where(y >= cy, s_up, s_down)
     return np.exp(-0.5 * (((x - cx) / sx) ** 2 + ((y - cy) / sy) ** 2))
 
@@ -181,7 +183,9 @@ def arkit_deltas(mesh: HeadMesh) -> dict[str, np.ndarray]:
         corner = front * gauss(x, yd, sgn * mw, ym, 0.011, 0.010)
         half = 0.5 * (1.0 + np.tanh(sgn * x / 0.006))
         cheek = front * gauss(x, yd, sgn * 0.035, -0.045, 0.013, 0.013)
-        out[f"mouthSmile{suffix}"] = vec(corner, (sgn * 0.006, 0.0085, -0.003)) + vec(cheek, (sgn * 0.001, 0.003, 0.002))
+        out[f"mouthSmile{suffix}"] = vec(corner, (sgn * 0.006, 0.0085, -0.003)) + vec(
+            cheek, (sgn * 0.001, 0.003, 0.002)
+        )
         out[f"mouthFrown{suffix}"] = vec(corner, (sgn * 0.0015, -0.007, 0.0))
         out[f"mouthDimple{suffix}"] = vec(corner, (sgn * 0.0035, 0.001, -0.0045))
         out[f"mouthStretch{suffix}"] = vec(corner, (sgn * 0.0075, -0.0025, -0.002))
@@ -234,4 +238,3 @@ def arkit_deltas(mesh: HeadMesh) -> dict[str, np.ndarray]:
     missing = [name for name in ARKIT_NAMES if name not in out]
     assert not missing, missing
     return {name: out[name] for name in ARKIT_NAMES}
-
