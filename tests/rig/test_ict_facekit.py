@@ -236,3 +236,12 @@ def test_assets_command_reports_ict(
     text = capsys.readouterr().out
     assert "ict_facekit: INCOMPLETE" in text and "FaceXModel/" in text
     assert "face_landmarker: not configured" in text and "export MIEN_FACE_LANDMARKER=" in text
+
+
+def test_damaged_cache_is_rebuilt(ict: Rig, ict_dir: Path) -> None:
+    cache = ict_cache_file(ict_dir)
+    cache.write_bytes(b"not an npz")
+    rig = load_ict_facekit(ict_dir)
+    np.testing.assert_array_equal(rig.neutral, ict.neutral)
+    with np.load(cache) as data:
+        assert "target_deltas" in data.files

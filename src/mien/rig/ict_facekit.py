@@ -34,6 +34,7 @@ import hashlib
 import json
 import os
 import sys
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -363,7 +364,7 @@ def load_ict_facekit(
         try:
             with np.load(cache_file, allow_pickle=False) as data:
                 arrays = {key: data[key] for key in data.files}
-        except (OSError, ValueError, KeyError):
+        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
             arrays = None  # a damaged cache is rebuilt
     if arrays is None:
         arrays = _parse(model)
