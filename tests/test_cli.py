@@ -33,8 +33,9 @@ def test_au_prints_active_channels_as_csv(capsys):
 
 def test_au_speed_mode_and_json(tmp_path):
     out = tmp_path / "au.json"
-    assert main(["au", "AU4E", "--speed", "0.05", "--duration", "1.2", "--start", "0.2", "--no-idle", "-o",
-                 str(out)]) == 0
+    assert (
+        main(["au", "AU4E", "--speed", "0.05", "--duration", "1.2", "--start", "0.2", "--no-idle", "-o", str(out)]) == 0
+    )
     clip = reader_for(out)(out)
     expected = 5.0 * (1 - 0.95**60)  # OpenFACS: 60 ticks of 5% after one second
     assert clip.channel("AU4L")[-1] == pytest.approx(expected, abs=0.1)

@@ -69,7 +69,7 @@ class _ActiveLaugh:
         low = min(int(position), self.clip.n_frames - 1)
         high = min(low + 1, self.clip.n_frames - 1)
         frac = position - low
-        return self.clip.values[low] * (1.0 - frac) + self.clip.values[high] * frac  # type: ignore[no-any-return]
+        return self.clip.values[low] * (1.0 - frac) + self.clip.values[high] * frac
 
 
 class Character:
@@ -422,4 +422,3 @@ class CharacterBatch:
             self.idle.apply(t_s, frames, np.maximum(0.0, 1.0 - mouth / 2.0))
         np.clip(frames[:, :_N_AU], 0.0, 5.0, out=frames[:, :_N_AU])
         return frames
-

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 from mien.errors import MissingExtraError
 from mien.facs.clip import Clip
@@ -11,7 +12,7 @@ from mien.facs.clip import Clip
 __all__ = ["plot_clip"]
 
 
-def _pyplot():  # type: ignore[no-untyped-def]
+def _pyplot() -> Any:
     try:
         import matplotlib
 

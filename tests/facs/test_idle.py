@@ -66,8 +66,9 @@ def test_random_walks_stay_bounded_and_step_with_the_papers_probabilities(walk_i
 
 def test_idle_parts_switch_off_one_by_one():
     frame = np.zeros(len(FACE_CHANNELS))
-    Idle(seed=1, settings=IdleSettings(blink=False, mouth=False, eyelids=False, neck=False, gaze=False,
-                                       wobble=False)).apply(3.0, frame)
+    Idle(
+        seed=1, settings=IdleSettings(blink=False, mouth=False, eyelids=False, neck=False, gaze=False, wobble=False)
+    ).apply(3.0, frame)
     assert not frame.any()
     frame[:] = 0
     Idle(seed=1, settings=IdleSettings(blink=False, mouth=False, eyelids=False, neck=False, gaze=False)).apply(

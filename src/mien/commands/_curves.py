@@ -6,6 +6,10 @@ import argparse
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from mien.facs.clip import Clip
 
 __all__ = ["add_curve_options", "emit_curves"]
 
@@ -22,7 +26,7 @@ def add_curve_options(parser: argparse.ArgumentParser, duration_s: float = 2.0) 
     parser.add_argument("--plot", type=Path, metavar="PNG", help="also save a plot of the curves")
 
 
-def emit_curves(clip, args: argparse.Namespace, title: str, events: Sequence[tuple[float, str]] = ()) -> None:  # type: ignore[no-untyped-def]
+def emit_curves(clip: Clip, args: argparse.Namespace, title: str, events: Sequence[tuple[float, str]] = ()) -> None:
     """Save or print ``clip`` and plot it, as the options in ``args`` say."""
     from mien.exchange import writer_for
 

@@ -4,7 +4,13 @@ from __future__ import annotations
 
 import argparse
 
+from typing import TYPE_CHECKING
+
 from mien.errors import InvalidValueError
+
+if TYPE_CHECKING:
+    from mien.render.camera import Camera
+    from mien.rig.model import Rig
 
 __all__ = ["add_scene_options", "parse_size", "scene_from_args"]
 
@@ -45,7 +51,7 @@ def add_scene_options(parser: argparse.ArgumentParser, camera: str = "portrait")
     )
 
 
-def scene_from_args(args: argparse.Namespace):  # type: ignore[no-untyped-def]
+def scene_from_args(args: argparse.Namespace) -> tuple[Rig, Camera, tuple[int, int]]:
     """(rig, camera, size) from the parsed options."""
     from mien.render.camera import camera_from_options
     from mien.rig.heads import load_head

@@ -7,7 +7,7 @@ import argparse
 from mien.commands._curves import add_curve_options, emit_curves
 
 
-def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "au",
         help="drive action units (e.g. AU6C AU12C) and output the AU curves",

@@ -4,8 +4,14 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from mien.commands._scene import add_scene_options, scene_from_args
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from mien.facs.clip import Clip
 
 DEMO_SEQUENCE = ("joy", "sadness", "anger", "surprise", "disgust", "fear", "enthusiastic", "furious", "frustrated",
                  "evil")  # fmt: skip
@@ -15,7 +21,7 @@ SEGMENT_S = 2.0
 """Seconds per expression in the demo video."""
 
 
-def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "demo",
         help="render the six basic emotions and four blends to an MP4 and a contact sheet",
@@ -34,7 +40,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
     parser.set_defaults(handler=run)
 
 
-def demo_clip(intensity: float, fps: float, seed: int, basis: str):  # type: ignore[no-untyped-def]
+def demo_clip(
+    intensity: float, fps: float, seed: int, basis: str
+) -> tuple[Clip, np.ndarray | None, list[tuple[float, str]]]:
     """(face clip, feature weights or None, [(peak time s, label)]) of the demo sequence."""
     from mien.affect.envelope import Envelope
     from mien.character import Character
@@ -51,6 +59,7 @@ def demo_clip(intensity: float, fps: float, seed: int, basis: str):  # type: ign
 
 
 def run(args: argparse.Namespace) -> int:
+
     from mien.animate import face_to_rig
     from mien.exchange.curves_csv import write as write_csv
     from mien.plot import plot_clip
@@ -69,7 +78,7 @@ def run(args: argparse.Namespace) -> int:
     plot = plot_clip(clip, out / "demo_curves.png", title="mien demo: AU curves", events=[(t, n) for t, n in peaks])
     weights, poses = face_to_rig(rig, clip, features)
     peak_frames = {min(clip.n_frames - 1, round(t * clip.fps)): name for t, name in peaks}
-    stills: dict[str, object] = {}
+    stills: dict[str, np.ndarray] = {}
     video = out / "demo.mp4"
     with make_renderer(rig, camera, size) as renderer:
         if args.no_video:
@@ -85,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
                     if index in peak_frames:
                         stills[peak_frames[index]] = image
     sheet = write_png(
-        contact_sheet([stills[name] for name in DEMO_SEQUENCE], list(DEMO_SEQUENCE), columns=5),  # type: ignore[misc]
+        contact_sheet([stills[name] for name in DEMO_SEQUENCE], list(DEMO_SEQUENCE), columns=5),
         out / "demo_contact_sheet.png",
     )
     print("wrote:")

@@ -7,7 +7,7 @@ import argparse
 from mien.commands._curves import add_curve_options, emit_curves
 
 
-def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "emote",
         help="express an emotion or blend and output the AU curves",

@@ -4,11 +4,17 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from mien.commands._scene import add_scene_options, scene_from_args
 
+if TYPE_CHECKING:
+    import numpy as np
 
-def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    from mien.facs.clip import Clip
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "render",
         help="render an emotion, AUs or a clip file to MP4 / PNG",
@@ -27,7 +33,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[ty
     parser.set_defaults(handler=run)
 
 
-def _face_clip(args: argparse.Namespace):  # type: ignore[no-untyped-def]
+def _face_clip(args: argparse.Namespace) -> tuple[Clip, np.ndarray | None, int]:
     """(face clip, feature weights or None, frame index of the peak)."""
     from mien.character import Character
     from mien.errors import UnknownNameError
@@ -46,8 +52,7 @@ def _face_clip(args: argparse.Namespace):  # type: ignore[no-untyped-def]
         specs = []
     if specs:
         for spec in specs:
-            character.play_au(spec, None, onset_s=0.4, apex_s=max(0.1, args.duration - 1.2), offset_s=0.5,
-                              start_s=0.2)
+            character.play_au(spec, None, onset_s=0.4, apex_s=max(0.1, args.duration - 1.2), offset_s=0.5, start_s=0.2)
         peak_s = 0.2 + 0.4 + 0.5 * max(0.1, args.duration - 1.2)
     else:
         from mien.affect.emotions import resolve_emotion

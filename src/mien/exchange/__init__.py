@@ -37,7 +37,7 @@ def _resolve(table: dict[str, str], path: str | Path, kind: str) -> Callable[...
     if suffix not in table:
         raise UnknownNameError(f"{kind} file format", suffix or str(path), tuple(table))
     module_name, function = table[suffix].split(":")
-    return getattr(importlib.import_module(module_name), function)  # type: ignore[no-any-return]
+    return getattr(importlib.import_module(module_name), function)
 
 
 def writer_for(path: str | Path) -> Callable[..., Any]:

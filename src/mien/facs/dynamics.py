@@ -181,9 +181,7 @@ class FacsEngine:
             self._decay_dt = -1.0
         self._settled = False
 
-    def set_many(
-        self, intensities: Mapping[str, float], speed: float | None = None, replace: bool = False
-    ) -> None:
+    def set_many(self, intensities: Mapping[str, float], speed: float | None = None, replace: bool = False) -> None:
         """Hold several AUs at once; ``speed`` (OpenFACS, 0..1 per tick at :attr:`tick_hz`) sets their tau.
 
         With ``replace`` every AU not named goes back to 0 (OpenFACS sends the full state; a missing AU is 0).
