@@ -14,6 +14,12 @@ Each frame has ~10 active targets. Prints median per-frame times (median of seve
 
 from __future__ import annotations
 
+import os
+
+# One thread for the BLAS baseline, like the single-threaded kernel (a second BLAS thread on a busy 2-core
+# machine makes the baseline erratic); set MIEN_BENCH_BLAS_THREADS to change it.
+os.environ["OPENBLAS_NUM_THREADS"] = os.environ["OMP_NUM_THREADS"] = os.environ.get("MIEN_BENCH_BLAS_THREADS", "1")
+
 import sys
 import time
 from collections.abc import Callable
@@ -121,6 +127,7 @@ def main() -> None:
     weights = np.zeros((N_FRAMES, n_targets), np.float32)
     for row in weights:
         row[rng.choice(movable, N_ACTIVE, replace=False)] = rng.uniform(0.1, 1.0, N_ACTIVE)
+    print(f"BLAS threads for the baseline: {os.environ['OPENBLAS_NUM_THREADS']}")
     print(f"rig {rig.name}: {n} vertices, {n_targets} targets, {N_ACTIVE} active per frame, {N_FRAMES} frames")
 
     out = np.empty((n, 3), np.float32)

@@ -32,7 +32,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "-o", "--out", type=Path, default=Path("mien-output"), help="output folder (default %(default)s)"
     )
-    parser.add_argument("--intensity", type=float, default=1.0, help="emotion intensity (default %(default)s)")
+    parser.add_argument(
+        "--intensity", type=float, default=1.2, help="emotion intensity, 1.2 as in the study (default %(default)s)"
+    )
     parser.add_argument("--fps", type=float, default=30.0, help="frames per second (default %(default)s)")
     parser.add_argument("--seed", type=int, default=0, help="idle-behaviour seed")
     parser.add_argument("--no-video", action="store_true", help="only the curves, plot and contact sheet")
