@@ -5,7 +5,7 @@ import pytest
 
 from mien import InvalidValueError
 from mien.facs.catalogue import FACE_CHANNELS
-from mien.facs.dynamics import FacsEngine, time_constant_from_speed, trapezoid
+from mien.facs.dynamics import FacsEngine, time_constant_from_speed
 
 AU12L = FACE_CHANNELS.index("AU12L")
 AU4R = FACE_CHANNELS.index("AU4R")
@@ -60,12 +60,6 @@ def test_timed_action_onset_apex_offset():
     assert engine.advance(0.85)[AU12L] == pytest.approx(2.5)
     assert engine.advance(1.01)[AU12L] == 0.0
     assert engine.actions == []
-
-
-def test_trapezoid_shape():
-    assert [trapezoid(t, 0.4, 0.3, 0.3) for t in (-0.1, 0.0, 0.2, 0.4, 0.6, 0.85, 1.0, 2.0)] == pytest.approx(
-        [0.0, 0.0, 0.5, 1.0, 1.0, 0.5, 0.0, 0.0]
-    )
 
 
 def test_head_codes_turn_into_degrees():

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mien.errors import InvalidValueError, UnknownNameError
+from mien.facs.intensity import check_intensity
 
 __all__ = [
     "BLENDS",
@@ -245,14 +246,3 @@ def emotion_vector(name_or_blend: str | Blend, intensity: float = 1.0) -> np.nda
     for index, weight in blend_components(name_or_blend):
         out[index] += value * weight
     return out
-
-
-def check_intensity(intensity: object, field: str = "intensity") -> float:
-    """``intensity`` as a float, or :class:`~mien.errors.InvalidValueError` unless finite and in [0, 5]."""
-    try:
-        value = float(intensity)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise InvalidValueError(field, intensity, "a number in [0, 5]") from None
-    if not (0.0 <= value <= MAX_INTENSITY):  # also false for NaN
-        raise InvalidValueError(field, intensity, "a number in [0, 5]")
-    return value

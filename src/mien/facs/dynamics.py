@@ -1,5 +1,8 @@
 """Time-based AU dynamics: held targets approached exponentially, and timed onset/apex/offset actions.
 
+Timed actions share the linear onset/hold/offset envelope of the emotion engine
+(:func:`mien.affect.envelope.envelope_value`).
+
 OpenFACS moves every morph a fraction ``Speed`` (0..1) of the way to its target on each tick, so its motion
 depends on the frame rate. mien integrates the same first-order system in continuous time,
 ``x(t + dt) = target + (x(t) - target) * exp(-dt / tau)``, which gives the same pose at any frame rate. A
@@ -15,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mien.affect.envelope import envelope_value
 from mien.errors import InvalidValueError
 from mien.facs.catalogue import ACTION_UNITS, FACE_CHANNELS, POSE_CHANNELS, au_channels
 from mien.facs.intensity import AUSpec, check_intensity, parse_au
@@ -26,7 +30,6 @@ __all__ = [
     "TimedAction",
     "check_duration",
     "time_constant_from_speed",
-    "trapezoid",
 ]
 
 OPENFACS_TICK_HZ = 60.0
@@ -75,25 +78,6 @@ def time_constant_from_speed(speed: float, tick_hz: float = OPENFACS_TICK_HZ) ->
     if s <= 0.0:
         return math.inf
     return -1.0 / (tick_hz * math.log1p(-s))
-
-
-def trapezoid(elapsed_s: float, onset_s: float, apex_s: float, offset_s: float) -> float:
-    """Onset/apex/offset envelope in 0..1: linear rise, flat apex, linear fall; 0 outside.
-
-    >>> trapezoid(0.2, 0.4, 0.3, 0.3)
-    0.5
-    """
-    if elapsed_s < 0.0:
-        return 0.0
-    if elapsed_s < onset_s:
-        return elapsed_s / onset_s
-    elapsed_s -= onset_s
-    if elapsed_s <= apex_s:
-        return 1.0
-    elapsed_s -= apex_s
-    if elapsed_s < offset_s:
-        return 1.0 - elapsed_s / offset_s
-    return 0.0
 
 
 @dataclass(frozen=True)
@@ -261,7 +245,7 @@ class FacsEngine:
         out[:] = current
         alive = []
         for action in self.actions:
-            level = trapezoid(t_s - action.start_s, action.onset_s, action.apex_s, action.offset_s)
+            level = envelope_value(t_s - action.start_s, action.onset_s, action.apex_s, action.offset_s)
             if level > 0.0:
                 for channel in action.channels:
                     out[channel] += level * action.intensity

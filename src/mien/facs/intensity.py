@@ -37,9 +37,9 @@ def check_intensity(value: float, field: str = "intensity") -> float:
     try:
         number = float(value)
     except (TypeError, ValueError):
-        raise InvalidValueError(field, value, "a number in 0..5") from None
+        raise InvalidValueError(field, value, "a number in [0, 5]") from None
     if not math.isfinite(number) or not 0.0 <= number <= MAX_INTENSITY:
-        raise InvalidValueError(field, value, "a finite number in 0..5 (FACS A..E = 1..5)")
+        raise InvalidValueError(field, value, "a finite number in [0, 5]")
     return number
 
 
