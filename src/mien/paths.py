@@ -18,7 +18,7 @@ import os
 import tomllib
 from pathlib import Path
 
-from mien.errors import MissingAssetError, UnknownNameError
+from mien.errors import InvalidValueError, MissingAssetError, UnknownNameError
 
 __all__ = ["ASSETS", "asset_path", "cache_dir", "config_path", "require_asset"]
 
@@ -52,8 +52,11 @@ def _from_config(name: str) -> str | None:
     path = config_path()
     if not path.is_file():
         return None
-    with path.open("rb") as handle:
-        data = tomllib.load(handle)
+    try:
+        with path.open("rb") as handle:
+            data = tomllib.load(handle)
+    except tomllib.TOMLDecodeError as exc:
+        raise InvalidValueError(f"config file {path}", str(exc), "valid TOML with an [assets] table") from None
     value = data.get("assets", {}).get(name)
     return str(value) if value else None
 
