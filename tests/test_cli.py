@@ -82,3 +82,21 @@ def test_demo_writes_video_contact_sheet_and_curves(tmp_path, capsys):
     assert reader_for(out / "demo_curves.csv")(out / "demo_curves.csv").n_frames == 100
     printed = capsys.readouterr().out
     assert "demo.mp4" in printed and "demo_contact_sheet.png" in printed
+
+
+def test_render_a_clip_file_with_a_subset_of_channels(tmp_path):
+    pytest.importorskip("moderngl")
+    from PIL import Image
+
+    clip_file = tmp_path / "smile.csv"
+    clip_file.write_text("time_s,AU12L,AU12R\n0,0,0\n0.5,4,4\n1.0,0,0\n")
+    smile, neutral = tmp_path / "smile.png", tmp_path / "neutral.png"
+    assert main(["render", str(clip_file), "--head", "builtin", "--size", "128x128", "-o", str(smile)]) == 0
+    still = tmp_path / "still.csv"
+    still.write_text("time_s,AU12L,AU12R\n0,0,0\n0.5,0,0\n1.0,0,0\n")
+    assert main(["render", str(still), "--head", "builtin", "--size", "128x128", "-o", str(neutral)]) == 0
+    difference = np.abs(np.asarray(Image.open(smile), float) - np.asarray(Image.open(neutral), float))
+    assert difference.max() > 30  # the peak frame (AU12 at D) was rendered, not the neutral first frame
+    bad = tmp_path / "bad.csv"
+    bad.write_text("time_s,AU99\n0,0\n")
+    assert main(["render", str(bad), "-o", str(tmp_path / "bad.png")]) == 2

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mien.errors import InvalidValueError
+from mien.errors import InvalidValueError, UnknownNameError
 from mien.facs.catalogue import FACE_CHANNELS, POSE_CHANNELS
 from mien.facs.clip import Clip
 from mien.rig.model import Rig
@@ -22,15 +22,22 @@ def face_to_rig(
 ) -> tuple[np.ndarray, np.ndarray]:
     """``(weights (n, n_targets) float32, poses (n, 5) float64)`` for ``rig`` from (n, 62) face frames.
 
+    ``frames`` is an array over FACE_CHANNELS or a :class:`Clip` whose channels are any subset of them.
+
     Weights come from the AU -> ARKit mapping (the shipped table, or the user table at ``mapping_path``);
     ``feature_weights`` (n, 54) metres, from a character with the ``"feature_points"`` basis, drive the
     rig's ``fp_*`` targets when it has them. Poses are head yaw/pitch/roll and gaze yaw/pitch in degrees.
     """
     from mien.rig.mapping import AUMapping
 
-    values = frames.values if isinstance(frames, Clip) else np.asarray(frames, dtype=np.float64)
-    if isinstance(frames, Clip) and frames.channels != FACE_CHANNELS:
-        raise InvalidValueError("frames channels", frames.channels[:5], "FACE_CHANNELS (a character's face clip)")
+    if isinstance(frames, Clip):
+        unknown = [name for name in frames.channels if name not in FACE_CHANNELS]
+        if unknown:
+            raise UnknownNameError("face channel", unknown[0], FACE_CHANNELS)
+        values = np.zeros((frames.n_frames, len(FACE_CHANNELS)))  # channels not in the clip stay neutral
+        values[:, [FACE_CHANNELS.index(name) for name in frames.channels]] = frames.values
+    else:
+        values = np.asarray(frames, dtype=np.float64)
     if values.ndim != 2 or values.shape[1] != len(FACE_CHANNELS):
         raise InvalidValueError("frames", values.shape, f"(n_frames, {len(FACE_CHANNELS)})")
     mapping = AUMapping.from_file(mapping_path) if mapping_path else AUMapping.default()

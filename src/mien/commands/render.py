@@ -43,7 +43,8 @@ def _face_clip(args: argparse.Namespace) -> tuple[Clip, np.ndarray | None, int]:
     first = args.what[0]
     if len(args.what) == 1 and Path(first).suffix.lower() in READERS and Path(first).exists():
         clip = reader_for(first)(first)
-        return clip, None, int(abs(clip.values[:, :-5]).sum(axis=1).argmax())
+        face = [j for j, name in enumerate(clip.channels) if not name.endswith("_deg")]
+        return clip, None, int(abs(clip.values[:, face]).sum(axis=1).argmax()) if face else 0
     basis = "feature_points" if args.basis == "feature-points" else "facs"
     character = Character(seed=args.seed, idle=not args.no_idle, expression_basis=basis)
     try:
