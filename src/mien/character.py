@@ -65,11 +65,7 @@ class _ActiveLaugh:
         return self.start_s + self.clip.duration_s
 
     def sample(self, t_s: float) -> np.ndarray:
-        position = (t_s - self.start_s) * self.clip.fps
-        low = min(int(position), self.clip.n_frames - 1)
-        high = min(low + 1, self.clip.n_frames - 1)
-        frac = position - low
-        return self.clip.values[low] * (1.0 - frac) + self.clip.values[high] * frac
+        return self.clip.sample(t_s - self.start_s)
 
 
 class Character:

@@ -9,10 +9,11 @@ from typing import Any
 from mien.errors import MissingExtraError
 from mien.facs.clip import Clip
 
-__all__ = ["plot_clip"]
+__all__ = ["plot_clip", "pyplot"]
 
 
-def _pyplot() -> Any:
+def pyplot() -> Any:
+    """``matplotlib.pyplot`` on the headless Agg backend, or :class:`MissingExtraError` naming ``mien[plot]``."""
     try:
         import matplotlib
 
@@ -38,7 +39,7 @@ def plot_clip(
     curves are drawn once, named without the side). Pose channels (``*_deg``) go on a second axis below.
     ``events`` are ``(time_s, label)`` marks drawn as vertical lines.
     """
-    plt = _pyplot()
+    plt = pyplot()
     names = list(channels) if channels is not None else list(clip.active_channels(threshold))
     shown: list[tuple[str, str]] = []
     for name in names:

@@ -16,7 +16,25 @@ import numpy as np
 
 from mien.errors import InvalidValueError, UnknownNameError
 
-__all__ = ["Clip"]
+__all__ = ["Clip", "interpolate_frames"]
+
+
+def interpolate_frames(values: np.ndarray, fps: float, times_s: np.ndarray | float) -> np.ndarray:
+    """Linear interpolation of (n_frames, n_channels) ``values`` sampled at ``fps`` at ``times_s`` seconds.
+
+    Returns (len(times_s), n_channels), or (n_channels,) for a scalar time; times outside the clip take the
+    first or last frame.
+
+    >>> interpolate_frames(np.array([[0.0], [2.0]]), 10.0, [0.05, 1.0]).tolist()
+    [[1.0], [2.0]]
+    """
+    values = np.asarray(values, dtype=np.float64)
+    times = np.asarray(times_s, dtype=np.float64)
+    position = np.clip(times * fps, 0.0, values.shape[0] - 1.0)
+    low = np.floor(position).astype(np.int64)
+    high = np.minimum(low + 1, values.shape[0] - 1)
+    weight = (position - low)[..., None]
+    return (1.0 - weight) * values[low] + weight * values[high]
 
 
 @dataclass(frozen=True, eq=False)
@@ -77,6 +95,10 @@ class Clip:
         if missing:
             raise UnknownNameError("channel", missing[0], self.channels)
         return Clip(self.values[:, columns], self.fps, tuple(names))
+
+    def sample(self, times_s: np.ndarray | float) -> np.ndarray:
+        """Values at ``times_s`` seconds by linear interpolation (see :func:`interpolate_frames`)."""
+        return interpolate_frames(self.values, self.fps, times_s)
 
     def active_channels(self, threshold: float = 1e-6) -> tuple[str, ...]:
         """Names of channels whose absolute value exceeds ``threshold`` somewhere."""

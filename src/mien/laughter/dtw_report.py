@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mien.errors import InvalidValueError, MissingExtraError
+from mien.errors import InvalidValueError
 
 __all__ = ["column_statistics", "format_dtw_table", "plot_dtw_heatmap"]
 
@@ -105,13 +105,9 @@ def plot_dtw_heatmap(
     ``annotate`` writes each value in its cell with ``decimals`` digits. Needs matplotlib (``mien[plot]``).
     """
     values = _check(matrix, labels)
-    try:
-        import matplotlib
+    from mien.plot import pyplot
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        raise MissingExtraError("matplotlib", "plot") from None
+    plt = pyplot()
     n = values.shape[0]
     size = 2.0 + 0.5 * n
     figure, axes = plt.subplots(figsize=(size + 1.0, size))

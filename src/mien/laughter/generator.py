@@ -30,7 +30,7 @@ import numpy as np
 
 from mien.errors import InvalidValueError
 from mien.facs.catalogue import FACE_CHANNELS
-from mien.facs.clip import Clip
+from mien.facs.clip import Clip, interpolate_frames
 from mien.laughter.builtin_library import default_library, laugh_pulses
 from mien.laughter.library import LaughLibrary
 from mien.laughter.names import CONTROLLER_NAMES
@@ -123,11 +123,6 @@ def _warp(u: np.ndarray, coefficients: np.ndarray) -> np.ndarray:
     return np.clip(out, 0.0, 1.0)
 
 
-def _resample(values: np.ndarray, source_fps: float, times_s: np.ndarray) -> np.ndarray:
-    grid = np.arange(values.shape[0]) / source_fps
-    return np.stack([np.interp(times_s, grid, values[:, j]) for j in range(values.shape[1])], axis=1)
-
-
 def _pulse_depths(reference: Clip) -> np.ndarray:
     """(16,) signed pulse depth of each controller in the representative: 95th percentile of |fast part|."""
     slow = smooth(reference.values, reference.fps)
@@ -180,14 +175,14 @@ def generate(
     source_times = _warp(np.linspace(0.0, 1.0, n), coefficients) * source_span
 
     if r.pulses:
-        slow = _resample(smooth(reference.values, reference.fps), reference.fps, source_times)
+        slow = interpolate_frames(smooth(reference.values, reference.fps), reference.fps, source_times)
         gate = expression_envelope(Clip(slow, fps, CONTROLLER_NAMES), reference)
         gate = gate / max(float(gate.max()), 1e-12)
         train = laugh_pulses(times, rate, gate, rng)
         values = slow + np.outer(train.values, _pulse_depths(reference))
         pulse_times = train.peak_times_s
     else:
-        slow = _resample(reference.values, reference.fps, source_times)
+        slow = interpolate_frames(reference.values, reference.fps, source_times)
         values = slow
         pulse_times = np.zeros(0)
     scale = gain * amplitude
@@ -206,25 +201,14 @@ def face_frame_at(result: LaughResult, t_s: float) -> np.ndarray | None:
     t = float(t_s)
     if not math.isfinite(t) or t < 0.0 or t > result.duration_s:
         return None
-    clip = result.face_clip
-    position = min(t * clip.fps, clip.n_frames - 1.0)
-    low = math.floor(position)
-    high = min(low + 1, clip.n_frames - 1)
-    weight = position - low
-    return np.asarray((1.0 - weight) * clip.values[low] + weight * clip.values[high])
+    return result.face_clip.sample(t)
 
 
 def plot_result(result: LaughResult, path: str | Path) -> Path:
     """Plot a result's moving controller curves and AU channels (two panels) to a PNG at ``path``."""
-    try:
-        import matplotlib
+    from mien.plot import pyplot
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        from mien.errors import MissingExtraError
-
-        raise MissingExtraError("matplotlib", "plot") from None
+    plt = pyplot()
     path = Path(path)
     figure, (top, bottom) = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
     for clip, axes, unit in ((result.controllers, top, "controller value"), (result.face_clip, bottom, "AU 0..5")):

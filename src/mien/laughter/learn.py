@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from mien.errors import InvalidValueError, MienError, MissingExtraError
-from mien.facs.clip import Clip
+from mien.facs.clip import Clip, interpolate_frames
 from mien.laughter.library import LaughLibrary, LibraryMetadata, utc_now
 from mien.laughter.names import CONTROLLER_NAMES, LAUGH_TYPES
 from mien.progress import progress
@@ -331,9 +331,8 @@ def _connect(scheduler: Any) -> tuple[Any, bool]:
 def _resample(values: np.ndarray, fps: float, target_fps: float) -> np.ndarray:
     if fps == target_fps:
         return values
-    source = np.arange(values.shape[0]) / fps
-    times = np.arange(int(np.floor(source[-1] * target_fps)) + 1) / target_fps
-    return np.stack([np.interp(times, source, values[:, j]) for j in range(values.shape[1])], axis=1)
+    times = np.arange(int(np.floor((values.shape[0] - 1) / fps * target_fps)) + 1) / target_fps
+    return interpolate_frames(values, fps, times)
 
 
 def learn_library(
@@ -539,11 +538,9 @@ def write_report(result: LearnResult, report_dir: str | os.PathLike[str], multiv
 
 
 def _plot_prototype(result: LearnResult, type_name: str, path: Path) -> None:
-    import matplotlib
+    from mien.plot import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     prototype = result.library.curve(type_name)
     takes = [t for t in result.takes if t.type == type_name]
     order = np.argsort(-np.abs(prototype.values).max(axis=0))[:4]
