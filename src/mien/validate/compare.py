@@ -171,13 +171,17 @@ class CompareResult:
         return json.dumps(self.to_dict(), indent=1)
 
     def per_au_csv(self) -> str:
-        """CSV text: one row per AU with its row correlation in each comparison (empty when undefined)."""
+        """CSV text, one row per AU: its row correlation in each comparison (empty when undefined), then the
+        peak intensity of the human's row and of each character row (a row that barely moves has a noisy r)."""
         out = io.StringIO()
         writer = csv.writer(out, lineterminator="\n")
-        writer.writerow(["au", *(f"{c.name}_r" for c in self.comparisons)])
+        peaks = ["human_peak", *(f"{c.name}_peak" for c in self.comparisons)]
+        writer.writerow(["au", *(f"{c.name}_r" for c in self.comparisons), *peaks])
         columns = [c.row_r for c in self.comparisons]
+        maxima = [m.max(axis=1) for m in (self.closed_loop.human, *(c.character for c in self.comparisons))]
         for i, code in enumerate(self.closed_loop.aus):
-            writer.writerow([f"AU{code}", *("" if math.isnan(col[i]) else f"{col[i]:.4f}" for col in columns)])
+            r_cells = ("" if math.isnan(col[i]) else f"{col[i]:.4f}" for col in columns)
+            writer.writerow([f"AU{code}", *r_cells, *(f"{m[i]:.3f}" for m in maxima)])
         return out.getvalue()
 
     def write(self, out_dir: str | os.PathLike[str]) -> dict[str, Path]:
@@ -239,7 +243,7 @@ def plot_comparison(comparison: MapComparison, path: str | os.PathLike[str]) -> 
         right = axes[1].secondary_yaxis("right")
         right.set_yticks(range(len(labels)), ["" if math.isnan(v) else f"{v:+.2f}" for v in row_r], fontsize=7)
         right.set_ylabel("r per AU")
-        fig.colorbar(image, ax=axes, shrink=0.8, label="intensity (0..5)", pad=0.1)
+        fig.colorbar(image, ax=axes, shrink=0.8, label="intensity (0..5)", pad=0.02)
         r_text = "undefined" if math.isnan(r) else f"{r:.2f}"
         fig.suptitle(f"{comparison.name}  (r = {r_text})")
         out = Path(path)
