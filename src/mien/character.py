@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from mien.affect.basis import facs_basis, feature_point_basis
+from mien.affect.basis import facs_basis, feature_point_basis, saturate
 from mien.affect.emotions import Blend, blend_components, check_intensity
 from mien.affect.engine import EmotionEngine, mood_step, shown_mood
 from mien.affect.envelope import Envelope, envelope_values
@@ -74,8 +74,8 @@ class Character:
     >>> c = Character(seed=1, idle=False)
     >>> c.emote("joy", 1.0)
     >>> frame = c.step(0.5)                      # hold phase of the 0.4/0.3/0.3 s envelope
-    >>> float(frame[FACE_CHANNELS.index("AU12L")])  # EMFACS joy: AU12 at D
-    4.0
+    >>> float(frame[FACE_CHANNELS.index("AU12L")])  # EMFACS joy: AU12 at 3.5 (prototypes v2)
+    3.5
     """
 
     def __init__(
@@ -209,7 +209,7 @@ class Character:
         expression = np.dot(emotion, self._basis, out=self._expression)
         expression += np.dot(mood, self._mood_basis, out=self._mood_expression)
         if self.expression_basis == "facs":
-            frame += expression
+            frame += saturate(expression)
         else:
             self.feature_weights[:] = expression
         laughing = False
@@ -412,6 +412,7 @@ class CharacterBatch:
         frames = self._frames
         np.dot(self._emotion, self._basis, out=frames)
         frames += np.dot(shown_mood(self._emotion, self._mood), self._mood_basis)
+        saturate(frames)  # the emotion layer only: the FACS layer is added after
         frames += self.current
         if self.idle is not None:
             mouth = frames[:, self._mouth].max(axis=1)

@@ -10,13 +10,30 @@ AU = {name: i for i, name in enumerate(FACE_CHANNELS)}
 
 def test_envelope_shape_on_the_face():
     c = Character(idle=False, mood_gain=0.0)  # no mood: the envelope alone
-    c.emote("joy", 1.0)  # AU12 at D (4.0) at intensity 1, 0.4/0.3/0.3 s
-    assert c.step(0.2)[AU["AU12L"]] == pytest.approx(2.0, abs=1e-9)
+    c.emote("joy", 1.0)  # AU12 at 3.5 at intensity 1 (prototypes v2), 0.4/0.3/0.3 s
+    assert c.step(0.2)[AU["AU12L"]] == pytest.approx(1.75, abs=1e-9)
     hold = [c.step(t)[AU["AU12L"]] for t in (0.4, 0.55, 0.7)]
-    assert hold == pytest.approx([4.0, 4.0, 4.0])
-    assert c.step(0.85)[AU["AU12L"]] == pytest.approx(2.0, abs=1e-9)
+    assert hold == pytest.approx([3.5, 3.5, 3.5])
+    assert c.step(0.85)[AU["AU12L"]] == pytest.approx(1.75, abs=1e-9)
     assert c.step(1.0)[AU["AU12L"]] == 0.0
     assert c.step(1.5)[AU["AU12L"]] == 0.0
+
+
+def test_strong_intensity_keeps_the_prototype_proportions():
+    """Above the knee the whole prototype scales by one factor (sadness keeps AU4 below AU1; v1 clamped both at E)."""
+    from mien.facs.prototypes import prototype_vector
+
+    prototype = prototype_vector("sadness")
+    for intensity in (1.2, 2.4, 5.0):
+        c = Character(idle=False, mood_gain=0.0)
+        c.emote("sadness", intensity)
+        frame = c.step(0.55)[: len(prototype) - 5]
+        assert frame.max() <= 5.0
+        np.testing.assert_allclose(frame / frame.max(), prototype[:-5] / prototype.max(), atol=1e-9)
+    strong, weak = Character(idle=False, mood_gain=0.0), Character(idle=False, mood_gain=0.0)
+    strong.emote("sadness", 2.4)
+    weak.emote("sadness", 1.2)
+    assert strong.step(0.55).max() > weak.step(0.55).max()  # 2.4 is still the stronger face
 
 
 def test_geometric_intensity_doubles_the_face():

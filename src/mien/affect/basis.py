@@ -10,6 +10,16 @@ the sum of its components, twice the intensity moves the face twice as far).
   channels (AU intensities 0..5 at emotion intensity 1; pose channels 0), so an emotion drives any ARKit
   rig or engine through the AU -> blendshape mapping.
 
+**The intensity rule.** An expression is ``intensities @ basis``: linear, so a blend is the sum of its components
+and twice the intensity moves the face twice as far (Broekens' geometric intensity). The feature-point basis stays
+linear at every intensity (metres have no ceiling). The FACS basis has one: FACS ends at E (5). Clamping each AU at
+E (mien 0.1) broke a prototype's proportions as soon as its largest AU reached E (at the study's intensity 2.4 every
+AU of every prototype sat at 5). :func:`saturate` instead scales the whole AU expression by one common factor once
+its largest AU passes :data:`SATURATION_KNEE`, with a smooth (tanh) approach to E: below the knee the expression is
+exactly linear; above it every AU keeps its ratio to the others, and the face keeps growing toward E without ever
+reaching a corner. With the version-2 prototypes (largest AU 3.5 at intensity 1) the study's 1.2 sits just above
+the knee (largest AU 4.2) and 2.4 saturates to E with the same proportions.
+
 ``closed_mouth=True`` gives the variant used for the mood ("mood is expressed ... always with a closed
 mouth (jaw feature)"): the Jaw feature row, or the mouth-opening AUs 25, 26 and 27, set to 0.
 """
@@ -26,16 +36,49 @@ from mien.errors import InvalidValueError
 
 __all__ = [
     "MOUTH_OPENING_AUS",
+    "SATURATION_KNEE",
     "expression",
     "facs_basis",
     "feature_point_basis",
     "feature_target_names",
+    "saturate",
 ]
 
 MOUTH_OPENING_AUS: tuple[str, ...] = ("AU25", "AU26", "AU27")
 """Lips part, jaw drop, mouth stretch: removed from the closed-mouth FACS basis."""
 
 _AXES = ("x", "y", "z")
+
+SATURATION_KNEE = 4.0
+"""AU intensity (D) above which :func:`saturate` starts scaling a FACS-basis expression down, as one piece."""
+
+_CEILING = 5.0  # FACS E
+
+
+def saturate(expression: np.ndarray, knee: float = SATURATION_KNEE) -> np.ndarray:
+    """Scale (..., n) AU expressions in place, each by one common factor, so no AU passes E (5); returns them.
+
+    An expression whose largest AU ``m`` is at most ``knee`` is unchanged; otherwise every AU is multiplied by
+    ``g(m) / m`` with ``g(m) = knee + (5 - knee) tanh((m - knee) / (5 - knee))`` (continuous, with a continuous
+    slope at the knee, approaching 5). Ratios between AUs never change.
+
+    >>> e = np.array([2.0, 8.0, 4.0])
+    >>> out = saturate(e.copy())
+    >>> round(float(out.max()), 3), round(float(out[0] / out[1]), 3)
+    (4.999, 0.25)
+    >>> saturate(np.array([1.0, 3.0])).tolist()
+    [1.0, 3.0]
+    """
+    if not 0.0 < knee < _CEILING:
+        raise InvalidValueError("knee", knee, f"an AU intensity in (0, {_CEILING:g})")
+    peak = expression.max(axis=-1, keepdims=True) if expression.size else expression
+    if np.all(peak <= knee):
+        return expression
+    span = _CEILING - knee
+    with np.errstate(divide="ignore", invalid="ignore"):
+        factor = np.where(peak > knee, (knee + span * np.tanh((peak - knee) / span)) / peak, 1.0)
+    expression *= factor
+    return expression
 
 
 def feature_target_names() -> tuple[str, ...]:

@@ -9,7 +9,7 @@ import numpy as np
 
 from mien.errors import UnknownNameError
 from mien.facs.catalogue import FACE_CHANNELS, au_channels
-from mien.facs.intensity import parse_au
+from mien.facs.intensity import check_intensity, parse_au
 
 __all__ = ["EMFACS_PROTOTYPES", "prototype_vector"]
 
@@ -21,8 +21,11 @@ def _load() -> dict[str, dict[str, float]]:
     for row in rows:
         entry: dict[str, float] = {}
         for token in row["aus"].split():
-            spec = parse_au(token)
-            entry[f"AU{spec.code}"] = float(spec.intensity or 0.0)
+            name, _, value = token.partition(":")
+            spec = parse_au(name if value else token)
+            entry[f"AU{spec.code}"] = check_intensity(float(value), f"{token} ({row['emotion']})") if value else float(
+                spec.intensity or 0.0
+            )
         table[row["emotion"]] = entry
     return table
 
@@ -36,7 +39,7 @@ def prototype_vector(emotion: str) -> np.ndarray:
 
     >>> v = prototype_vector("surprise")
     >>> float(v[FACE_CHANNELS.index("AU26")]), float(v[FACE_CHANNELS.index("AU1L")])
-    (3.0, 3.0)
+    (3.5, 3.5)
     """
     try:
         aus = EMFACS_PROTOTYPES[emotion]

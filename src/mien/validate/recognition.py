@@ -1,0 +1,370 @@
+"""Emotion recognition of rendered faces under the Broekens study conditions (a machine Table 4).
+
+Each stimulus is one face at the peak of an emotion event (the character's own engine: the same basis,
+intensity rule and blends as a running character), rendered on a head and identity through a camera, and
+classified by a detector that gives emotion probabilities (:class:`~mien.validate.face_detector.FaceDetector`).
+For views where the landmarker finds no face (the 90-degree profile), the crop comes from the rig's own
+landmarks projected through the camera (the ``hint``): that is mien's answer to the lateral condition, and
+the detection records it.
+
+Metrics, per expression over all renders:
+
+* recognition rate: share of renders whose top label is the expression's label (basic emotions and neutral);
+  for a blend, the share whose two top labels are its components' labels (where the classifier has them);
+* confusion matrix: expression x top label;
+* quality (Broekens' Table 4 metric ``target / (mean over labels x number of labels)``): with probabilities
+  summing to 1 over the classifier's labels, it is the mean probability of the target label; the study's
+  human values (:data:`HUMAN_QUALITY`) are shown beside it;
+* disgust's FACS signs: AU9 (nose wrinkler) and AU10 (upper-lip raiser) estimated from the detected
+  blendshapes (:class:`~mien.validate.au_solve.AUSolver`) against the same head's neutral, and the
+  geometric shortening of the nose-to-upper-lip distance on the rendered mesh (iBUG landmarks 33 -> 51),
+  because the shipped classifier almost never answers "disgust" and cannot be the judge of it.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mien.errors import InvalidValueError, UnknownNameError
+from mien.validate.detector import EMOTION_LABELS, Detector
+
+__all__ = [
+    "BLEND_COMPONENTS",
+    "EXPRESSIONS",
+    "HUMAN_QUALITY",
+    "LABEL_OF",
+    "VIEWS",
+    "RecognitionResult",
+    "Stimulus",
+    "StimulusScore",
+    "peak_face",
+    "run_recognition",
+    "study_stimuli",
+]
+
+EXPRESSIONS: tuple[str, ...] = (
+    "joy", "sadness", "anger", "surprise", "disgust", "fear", "enthusiastic", "furious", "frustrated", "evil",
+)  # fmt: skip
+"""The ten expressions of the Broekens study: six basic emotions, then the four blends."""
+
+LABEL_OF: dict[str, str] = {
+    "joy": "happy",
+    "sadness": "sad",
+    "anger": "angry",
+    "surprise": "surprise",
+    "disgust": "disgust",
+    "fear": "fear",
+    "neutral": "neutral",
+}
+"""Expression -> the classifier label that names it."""
+
+BLEND_COMPONENTS: dict[str, tuple[str, str]] = {
+    "enthusiastic": ("joy", "surprise"),
+    "furious": ("anger", "surprise"),
+    "frustrated": ("anger", "sadness"),
+    "evil": ("joy", "anger"),
+}
+"""The study's blends and their components (SPEC section 3)."""
+
+HUMAN_QUALITY: dict[str, float] = {
+    "fear": 0.576,
+    "anger": 0.575,
+    "disgust": 0.372,
+    "enthusiastic": 0.263,
+    "evil": 0.467,
+    "frustrated": 0.181,
+    "furious": 0.327,
+    "joy": 0.806,
+    "sadness": 0.848,
+    "surprise": 0.592,
+}
+"""Broekens et al.'s Table 4: recognition quality by the study's 19 participants (ten labels)."""
+
+VIEWS: dict[str, tuple[float, float]] = {
+    "frontal-1m": (0.0, 1.0),
+    "frontal-3m": (0.0, 3.0),
+    "oblique-1m": (45.0, 1.0),
+    "oblique-3m": (45.0, 3.0),
+    "lateral-1m": (90.0, 1.0),
+    "lateral-3m": (90.0, 3.0),
+}
+"""View name -> (camera yaw degrees toward the character's left, distance metres); all at the study's field of
+view. ``frontal`` and ``lateral`` are the study's conditions; ``oblique`` (45 degrees) is mien's addition."""
+
+PEAK_TIME_S = 0.55
+"""Time of the sampled frame after the event starts: the middle of the default 0.4/0.3/0.3 s envelope's hold."""
+
+
+@dataclass(frozen=True)
+class Stimulus:
+    """One rendered condition."""
+
+    expression: str
+    """One of :data:`EXPRESSIONS` or ``"neutral"``."""
+    head: str
+    """Head name (``"builtin"``, ``"ict"``)."""
+    identity: str
+    """Identity preset of the head."""
+    basis: str
+    """Expression basis: ``"facs"`` or ``"feature_points"``."""
+    view: str
+    """A key of :data:`VIEWS`."""
+    intensity: float
+    """Emotion intensity (the study: 1.2 and 2.4; 0 for neutral)."""
+
+
+@dataclass(frozen=True)
+class StimulusScore:
+    """What the detector said about one stimulus."""
+
+    stimulus: Stimulus
+    """The condition."""
+    emotions: tuple[float, ...]
+    """Probabilities over :data:`~mien.validate.detector.EMOTION_LABELS`."""
+    face_found: bool
+    """True when the landmarker found the face itself (False: the crop came from the rig's landmarks)."""
+    aus: dict[str, float] = field(default_factory=dict)
+    """Detected AU intensities (``"AU9"`` -> 0..5) when the detector gives blendshapes."""
+    nose_lip_mm: float = float("nan")
+    """Nose-base to upper-lip-top distance on the rendered mesh, millimetres (iBUG 33 -> 51)."""
+
+    @property
+    def top(self) -> str:
+        """Top label."""
+        return EMOTION_LABELS[int(np.argmax(self.emotions))]
+
+    @property
+    def top2(self) -> tuple[str, str]:
+        """The two top labels, most probable first."""
+        order = np.argsort(self.emotions)[::-1]
+        return EMOTION_LABELS[int(order[0])], EMOTION_LABELS[int(order[1])]
+
+    def correct(self) -> bool | None:
+        """Recognised? (top label for basics and neutral; top two for blends); None if not judgeable."""
+        name = self.stimulus.expression
+        if name in BLEND_COMPONENTS:
+            wanted = {LABEL_OF[c] for c in BLEND_COMPONENTS[name]}
+            return set(self.top2) == wanted
+        return self.top == LABEL_OF[name]
+
+
+def study_stimuli(
+    heads: Sequence[tuple[str, str]],
+    bases: Sequence[str] = ("facs", "feature_points"),
+    views: Sequence[str] = ("frontal-1m", "frontal-3m"),
+    intensities: Sequence[float] = (1.2, 2.4),
+    expressions: Sequence[str] = EXPRESSIONS,
+    neutral: bool = True,
+) -> list[Stimulus]:
+    """Every combination of the conditions (plus one neutral face per head, basis and view)."""
+    for view in views:
+        if view not in VIEWS:
+            raise UnknownNameError("view", view, tuple(VIEWS))
+    for name in expressions:
+        if name not in EXPRESSIONS:
+            raise UnknownNameError("expression", name, EXPRESSIONS)
+    for basis in bases:
+        if basis not in ("facs", "feature_points"):
+            raise InvalidValueError("basis", basis, "'facs' or 'feature_points'")
+    for value in intensities:
+        if not (np.isfinite(value) and 0 < value <= 5):
+            raise InvalidValueError("intensity", value, "a number in (0, 5]")
+    out = []
+    for head, identity in heads:
+        for basis in bases:
+            for view in views:
+                if neutral:
+                    out.append(Stimulus("neutral", head, identity, basis, view, 0.0))
+                for name in expressions:
+                    for value in intensities:
+                        out.append(Stimulus(name, head, identity, basis, view, float(value)))
+    return out
+
+
+def peak_face(expression: str, intensity: float, basis: str) -> tuple[np.ndarray, np.ndarray | None]:
+    """``(face frame (62,), feature weights (54,) or None)`` at the peak of one emotion event.
+
+    The frame comes from a :class:`~mien.character.Character` with idle behaviour off, so the stimulus is
+    exactly what a running character shows (basis, intensity rule, blends).
+    """
+    from mien.character import Character
+
+    character = Character(seed=0, idle=False, expression_basis=basis)
+    if expression != "neutral":
+        character.emote(expression, intensity, start_s=0.0)
+    frame = character.step(PEAK_TIME_S).copy()
+    features = character.feature_weights.copy() if basis == "feature_points" else None
+    return frame, features
+
+
+def _camera(view: str) -> Any:
+    from mien.render.camera import FACE_CENTRE_M, HEAD_CENTRE_M, Camera
+
+    yaw, distance = VIEWS[view]
+    target = HEAD_CENTRE_M if yaw >= 90 else FACE_CENTRE_M
+    return Camera(yaw_deg=yaw, distance_m=distance, target=target)
+
+
+@dataclass(frozen=True, eq=False)
+class RecognitionResult:
+    """Scores of every stimulus, with the images that were judged."""
+
+    scores: tuple[StimulusScore, ...]
+    """One per stimulus, in the order rendered."""
+    detector: str
+    """The detector's name."""
+    timings_s: dict[str, float]
+    """Seconds spent per stage (``render``, ``detect``, ``load``)."""
+    images: dict[int, np.ndarray] = field(default_factory=dict, repr=False)
+    """Index into :attr:`scores` -> the rendered (h, w, 3) uint8 image (kept when asked)."""
+
+    def subset(self, **conditions: Any) -> list[StimulusScore]:
+        """Scores whose stimulus matches every ``field=value`` (a value may be a tuple of allowed values)."""
+        out = []
+        for score in self.scores:
+            ok = True
+            for key, wanted in conditions.items():
+                value = getattr(score.stimulus, key)
+                ok &= value in wanted if isinstance(wanted, tuple) else value == wanted
+            if ok:
+                out.append(score)
+        return out
+
+    def rate(self, **conditions: Any) -> float:
+        """Share of matching stimuli recognised (nan when none match)."""
+        judged = [s.correct() for s in self.subset(**conditions)]
+        judged = [j for j in judged if j is not None]
+        return float(np.mean(judged)) if judged else float("nan")
+
+    def quality(self, expression: str, **conditions: Any) -> float:
+        """Machine quality (mean probability of the target label) of a basic emotion; nan for blends."""
+        if expression not in LABEL_OF:
+            return float("nan")
+        column = EMOTION_LABELS.index(LABEL_OF[expression])
+        scores = self.subset(expression=expression, **conditions)
+        return float(np.mean([s.emotions[column] for s in scores])) if scores else float("nan")
+
+    def confusion(self, **conditions: Any) -> tuple[list[str], np.ndarray]:
+        """(row expressions, (n_expressions, 7) counts of top labels over EMOTION_LABELS)."""
+        rows = [e for e in ("neutral", *EXPRESSIONS) if self.subset(expression=e, **conditions)]
+        matrix = np.zeros((len(rows), len(EMOTION_LABELS)), np.int64)
+        for r, name in enumerate(rows):
+            for score in self.subset(expression=name, **conditions):
+                matrix[r, EMOTION_LABELS.index(score.top)] += 1
+        return rows, matrix
+
+    def to_json(self) -> dict[str, Any]:
+        """A JSON-ready summary: per-stimulus scores, rates, quality next to the human values, timings."""
+        rows, matrix = self.confusion()
+        return {
+            "detector": self.detector,
+            "labels": list(EMOTION_LABELS),
+            "stimuli": [
+                {
+                    **vars(s.stimulus),
+                    "emotions": [round(float(p), 4) for p in s.emotions],
+                    "top": s.top,
+                    "correct": s.correct(),
+                    "face_found": s.face_found,
+                    "aus": {k: round(v, 3) for k, v in s.aus.items()},
+                    "nose_lip_mm": None if not np.isfinite(s.nose_lip_mm) else round(s.nose_lip_mm, 3),
+                }
+                for s in self.scores
+            ],
+            "recognition": {e: self.rate(expression=e) for e in ("neutral", *EXPRESSIONS)},
+            "quality": {e: {"machine": self.quality(e), "human": HUMAN_QUALITY.get(e)} for e in EXPRESSIONS},
+            "confusion": {"rows": rows, "matrix": matrix.tolist()},
+            "timings_s": self.timings_s,
+        }
+
+    def write_json(self, path: str | Path) -> Path:
+        """Write :meth:`to_json` to ``path`` (atomically: a temporary name renamed at the end)."""
+        target = Path(path)
+        partial = target.with_name(target.name + ".partial")
+        partial.write_text(json.dumps(self.to_json(), indent=1, default=_json_default), encoding="utf-8")
+        partial.replace(target)
+        return target
+
+
+def _json_default(value: object) -> object:
+    if isinstance(value, np.generic):
+        return value.item()
+    raise TypeError(f"not JSON serialisable: {type(value).__name__}")
+
+
+def run_recognition(
+    stimuli: Sequence[Stimulus],
+    detector: Detector | None = None,
+    size: tuple[int, int] = (512, 512),
+    keep_images: bool = False,
+    progress: bool = True,
+) -> RecognitionResult:
+    """Render and classify every stimulus (grouped by head, basis and view so each setup is built once)."""
+    from mien.progress import progress as progress_bar
+    from mien.rig.heads import load_head
+    from mien.validate.au_solve import AUSolver
+    from mien.validate.face_detector import FaceDetector
+    from mien.validate.stimuli import StimulusRenderer
+
+    own = detector is None
+    active: Detector = FaceDetector() if detector is None else detector
+    timings = {"load": 0.0, "render": 0.0, "detect": 0.0}
+    solver = AUSolver(aus=(9, 10))
+    scores: list[StimulusScore | None] = [None] * len(stimuli)
+    images: dict[int, np.ndarray] = {}
+    groups: dict[tuple[str, str, str, str], list[int]] = {}
+    for index, stimulus in enumerate(stimuli):
+        groups.setdefault((stimulus.head, stimulus.identity, stimulus.basis, stimulus.view), []).append(index)
+    bar = progress_bar(range(len(stimuli)), total=len(stimuli), desc="recognition", enabled=progress)
+    ticker = iter(bar)
+    rigs: dict[tuple[str, str, bool], Any] = {}
+    try:
+        for (head, identity, basis, view), indices in groups.items():
+            started = time.perf_counter()
+            key = (head, identity, basis == "feature_points")
+            if key not in rigs:
+                rigs[key] = load_head(head, identity, feature_points=key[2])
+            rig = rigs[key]
+            timings["load"] += time.perf_counter() - started
+            with StimulusRenderer(rig, _camera(view), size) as renderer:
+                for index in indices:
+                    stimulus = stimuli[index]
+                    started = time.perf_counter()
+                    frame, features = peak_face(stimulus.expression, stimulus.intensity, basis)
+                    weights = renderer.weights(frame, features)
+                    rgb, hint = renderer.render_weights(weights)
+                    deformed = renderer._deformer.deform(weights)
+                    nose_lip = float(np.linalg.norm(deformed[rig.landmarks[33]] - deformed[rig.landmarks[51]])) * 1e3
+                    timings["render"] += time.perf_counter() - started
+                    started = time.perf_counter()
+                    found = active.detect(rgb, hint)
+                    timings["detect"] += time.perf_counter() - started
+                    emotions = found.emotions if found.emotions is not None else np.full(len(EMOTION_LABELS), np.nan)
+                    aus: dict[str, float] = {}
+                    if found.blendshapes is not None:
+                        values = solver.solve(found.blendshapes)
+                        aus = {f"AU{code}": float(v) for code, v in zip(solver.aus, values, strict=True)}
+                    scores[index] = StimulusScore(
+                        stimulus,
+                        tuple(float(p) for p in emotions),
+                        bool(found.found and not found.landmarks_from_hint),
+                        aus,
+                        nose_lip,
+                    )
+                    if keep_images:
+                        images[index] = rgb
+                    next(ticker, None)
+    finally:
+        if own:
+            active.close()
+    for _ in ticker:
+        pass
+    done = tuple(s for s in scores if s is not None)
+    return RecognitionResult(done, active.name, {k: round(v, 3) for k, v in timings.items()}, images)
