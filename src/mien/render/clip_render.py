@@ -19,6 +19,7 @@ from mien.errors import InvalidValueError, MienError
 from mien.progress import progress as progress_bar
 from mien.render.appearance import rig_vertex_colors, visible_faces
 from mien.render.camera import Camera
+from mien.render.face_paint import face_paint
 from mien.render.offscreen import DEFAULT_BACKGROUND, OffscreenRenderer
 from mien.render.video import write_mp4, write_png
 from mien.rig.deform import Deformer
@@ -98,14 +99,18 @@ def make_renderer(
     background: tuple[int, int, int] = DEFAULT_BACKGROUND,
     samples: int = 4,
 ) -> OffscreenRenderer:
-    """An :class:`OffscreenRenderer` for ``rig``: its visible faces and region colours, ``size`` (w, h) pixels."""
+    """An :class:`OffscreenRenderer` for ``rig``: its visible faces, region colours and face paint (brows, lash
+    lines, lips: :func:`~mien.render.face_paint.face_paint`), ``size`` (w, h) pixels."""
     width, height = _check_size(size)
+    paint = face_paint(rig)
     return OffscreenRenderer(
         visible_faces(rig),
         width,
         height,
         camera,
         vertex_colors=rig_vertex_colors(rig),
+        texture=None if paint is None else paint.texture,
+        texcoords=None if paint is None else paint.texcoords,
         background=background,
         samples=samples,
     )

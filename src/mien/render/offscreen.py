@@ -145,7 +145,9 @@ class OffscreenRenderer:
     """Renders one mesh topology, frame after frame, into (height, width, 3) uint8 sRGB images.
 
     ``faces`` (m, 3) int32 triangles; ``vertex_colors`` (n, 3) linear RGB albedo in 0..1 (None: a skin
-    tone); ``background`` 8-bit sRGB; ``samples`` multisample anti-aliasing (0 = off, 4 = default; about
+    tone); ``texture`` (th, tw, 4) float premultiplied linear RGB albedo and opacity in 0..1, painted over the
+vertex colours where ``texcoords`` (n, 3) say (u, v in 0..1, row 0 of ``texture`` at v = 0, and the paint's
+strength at the vertex 0..1; see :mod:`mien.render.face_paint`); ``background`` 8-bit sRGB; ``samples`` multisample anti-aliasing (0 = off, 4 = default; about
     doubles the cost per frame on llvmpipe); ``cull_back_faces`` skips triangles facing away from the camera
     (a third faster; right for closed, consistently wound meshes); ``backend`` the moderngl standalone
     backend (``"egl"``; None = the platform default, see the module doc).
@@ -160,6 +162,8 @@ class OffscreenRenderer:
         height: int,
         camera: Camera,
         vertex_colors: np.ndarray | None = None,
+        texture: np.ndarray | None = None,
+        texcoords: np.ndarray | None = None,
         background: tuple[int, int, int] = DEFAULT_BACKGROUND,
         samples: int = 4,
         cull_back_faces: bool = True,
@@ -175,6 +179,16 @@ class OffscreenRenderer:
             if vertex_colors.ndim != 2 or vertex_colors.shape[1] != 3 or not np.isfinite(vertex_colors).all():
                 raise InvalidValueError("vertex_colors", vertex_colors.shape, "(n, 3) finite RGB in 0..1")
         self.vertex_colors = vertex_colors
+        if (texture is None) != (texcoords is None):
+            raise InvalidValueError("texture", None if texture is None else texture.shape, "given with texcoords")
+        if texture is not None and texcoords is not None:
+            texture = np.ascontiguousarray(texture, dtype=np.float32)
+            texcoords = np.ascontiguousarray(texcoords, dtype=np.float32)
+            if texture.ndim != 3 or texture.shape[2] != 4 or min(texture.shape[:2]) < 1:
+                raise InvalidValueError("texture", texture.shape, "(height, width, 4) premultiplied RGBA")
+            if texcoords.ndim != 2 or texcoords.shape[1] != 3 or not np.isfinite(texcoords).all():
+                raise InvalidValueError("texcoords", texcoords.shape, "(n, 3) finite u, v, strength")
+        self.texcoords = texcoords
         if len(background) != 3 or not all(0 <= int(c) <= 255 for c in background):
             raise InvalidValueError("background", background, "three 8-bit sRGB values 0..255")
         self.background = tuple(int(c) for c in background)
@@ -210,6 +224,15 @@ class OffscreenRenderer:
                 self._ctx.framebuffer(color_attachments=[self._ctx.renderbuffer(size, 4)]) if samples else None
             )
             self._index_buffer = self._ctx.buffer(faces.tobytes())
+            # Without paint a 1x1 transparent texture keeps one shader for both cases.
+            paint = texture if texture is not None else np.zeros((1, 1, 4), np.float32)
+            self._paint = self._ctx.texture(paint.shape[1::-1], 4, paint.tobytes(), dtype="f4")
+            self._paint.repeat_x = self._paint.repeat_y = False
+            self._paint.build_mipmaps()
+            self._paint.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
+            self._paint.anisotropy = 8.0
+            self._paint.use(0)
+            self._program["u_paint"].value = 0
             self._ctx.enable(self._ctx.DEPTH_TEST)
         self._vao: Any = None
         self.set_camera(camera)
@@ -233,18 +256,25 @@ class OffscreenRenderer:
             colors = np.broadcast_to(np.asarray(DEFAULT_SKIN_RGB, np.float32), (n_vertices, 3))
         elif len(colors) != n_vertices:
             raise InvalidValueError("vertex_colors", colors.shape, f"({n_vertices}, 3), one per vertex")
+        texcoords = self.texcoords
+        if texcoords is None:
+            texcoords = np.zeros((n_vertices, 3), np.float32)
+        elif len(texcoords) != n_vertices:
+            raise InvalidValueError("texcoords", texcoords.shape, f"({n_vertices}, 3), one per vertex")
         ctx = self._ctx
         self._n_vertices = n_vertices
         self._normals = np.empty((n_vertices, 3), np.float32)
         self._position_buffer = ctx.buffer(reserve=n_vertices * 12)
         self._normal_buffer = ctx.buffer(reserve=n_vertices * 12)
         self._color_buffer = ctx.buffer(np.ascontiguousarray(colors, np.float32).tobytes())
+        self._texcoord_buffer = ctx.buffer(np.ascontiguousarray(texcoords, np.float32).tobytes())
         self._vao = ctx.vertex_array(
             self._program,
             [
                 (self._position_buffer, "3f", "in_position"),
                 (self._normal_buffer, "3f", "in_normal"),
                 (self._color_buffer, "3f", "in_color"),
+                (self._texcoord_buffer, "3f", "in_texcoord"),
             ],
             index_buffer=self._index_buffer,
             index_element_size=4,
@@ -280,6 +310,7 @@ class OffscreenRenderer:
             self._normal_buffer.write(self._normals)
             ctx = self._ctx
             self._fbo.use()
+            self._paint.use(0)
             ctx.clear(*(c / 255.0 for c in self.background), 1.0)
             self._vao.render()
             source = self._fbo
