@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = [
+    "BROW_Y_D",
     "CAVITY",
     "EARS",
     "EYE_L",
@@ -51,6 +52,8 @@ Y_TOP_D = 0.118
 """Design height of the crown, metres."""
 Y_NECK_D = -0.222
 """Design height of the bottom of the neck, metres."""
+BROW_Y_D = 0.0150
+"""Design height of the middle of the brow at its inner end, metres above the eye centres."""
 Z_CENTRE = -0.07
 """Depth of the skull's vertical axis, metres."""
 
@@ -226,7 +229,7 @@ def _relief(x: np.ndarray, yd: np.ndarray, shape: HeadShape) -> np.ndarray:
     """Forward depth offset (m) of the facial relief at frontal design position (x, yd)."""
     ax = np.abs(x)
     ym = Y_MOUTH_D
-    z = 0.004 * gauss(ax, yd, 0.029, 0.021, 0.020, 0.007)  # brow ridge
+    z = 0.004 * gauss(ax, yd, 0.029, BROW_Y_D + 0.001, 0.020, 0.007)  # brow ridge
     z += 0.002 * gauss(x, yd, 0.0, 0.016, 0.010, 0.010)  # glabella
     z += 0.006 * gauss(ax, yd, 0.040, -0.032, 0.014, 0.015)  # cheekbones
     z -= 0.003 * gauss(ax, yd, 0.052, -0.002, 0.010, 0.014)  # temples / outer orbit
@@ -262,7 +265,7 @@ def lid_heights(t: np.ndarray, shape: HeadShape) -> tuple[np.ndarray, np.ndarray
     """Upper and lower lid margin heights (m) above / below the eye slit at relative position t in -1..1."""
     inside = np.clip(1.0 - t**2, 0.0, 1.0)
     scale = shape.eye_radius_m / 0.012
-    return 0.0050 * scale * inside**0.55, 0.0042 * scale * inside**0.8
+    return 0.0046 * scale * inside**0.6, 0.0046 * scale * inside**0.8
 
 
 def _unit_sphere(n_rings: int, n_segments: int, polar: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -387,7 +390,10 @@ def build_head_mesh(shape: HeadShape) -> HeadMesh:
         d = all_v - c
         d_ell = np.sqrt((d[:, 0] / 1.12) ** 2 + d[:, 1] ** 2)
         front_v = all_v[:, 2] > -0.02
-        socket = 0.008 * (1.0 - smoothstep(0.008, 0.018, d_ell)) * front_v
+        # shallow above and below the eye (a deep ring there reads as staring), deeper at the corners so the
+        # skin by the nose lies on the lid sphere and a blink closes there too
+        corner = (d[:, 0] / 1.12) ** 2 / np.maximum(d_ell**2, 1e-12)
+        socket = (0.003 + 0.006 * corner) * (1.0 - smoothstep(0.008, 0.018, d_ell)) * front_v
         z_face = all_v[:, 2] - socket
         r2 = rc**2 - d[:, 0] ** 2 - d[:, 1] ** 2
         z_sph = np.where((r2 > 0) & front_v, c[2] + np.sqrt(np.clip(r2, 0.0, None)), -1.0)
@@ -558,6 +564,11 @@ def build_head_mesh(shape: HeadShape) -> HeadMesh:
     inner_ids = np.concatenate([inner_up_ids, inner_lo_ids])
     colors[inner_ids] = dark * 1.4
     colors[np.concatenate(lid_flap_ids)] = srgb_to_linear((0.70, 0.42, 0.40))
+    # lash line: the upper lid margin and its tucked-in rim dark, so the lid reads as resting on the iris
+    lash = srgb_to_linear(shape.brow_srgb) * 0.45
+    for e, cols in enumerate(eye_cols):
+        colors[grid[i_eye, cols]] = lash
+        colors[lid_flap_ids[2 * e]] = lash
 
     lower_side = np.zeros(len(vertices))
     lower_side[:skin_n] = _side_field(skin_m[:, 0], skin_m[:, 1], Y_MOUTH_D, mw, 0.5, 0.0, below=True)
@@ -630,10 +641,10 @@ def skin_masks(v: np.ndarray, m: np.ndarray, shape: HeadShape) -> dict[str, np.n
     above = yd - Y_MOUTH_D
     lip = np.where(above >= 0, smoothstep(0.0012, -0.0012, above - up_h), smoothstep(0.0012, -0.0012, -above - lo_h))
     lips = lip * smoothstep(0.0, 0.15, across) * (v[:, 2] > 0.0)
-    # brows: an arched band over each eye, thicker at the inner end
+    # brows: a gently arched band over each eye, thicker at the inner end
     t = (ax - 0.012) / 0.044
-    brow_y = 0.021 + 0.007 * np.sin(np.pi * np.clip(t, 0, 1) * 0.85) - 0.003 * np.clip(t, 0, 1)
-    thick = 0.0060 * (1.0 - 0.45 * np.clip(t, 0, 1))
+    brow_y = brow_line(x)
+    thick = 0.0048 * (1.0 - 0.45 * np.clip(t, 0, 1))
     brows = (1 - smoothstep(0.4, 1.1, np.abs(yd - brow_y) / thick)) * smoothstep(-0.08, 0.05, t)
     brows *= (1 - smoothstep(0.95, 1.08, t)) * (v[:, 2] > -0.03)
     # painted hair: above a hairline that drops from the forehead to the nape
@@ -643,10 +654,14 @@ def skin_masks(v: np.ndarray, m: np.ndarray, shape: HeadShape) -> dict[str, np.n
     return {"lips": lips, "brows": brows, "hair": hair}
 
 
-def brow_line(x: np.ndarray) -> np.ndarray:
-    """Design height (m) of the middle of the painted brow above frontal position ``x``."""
-    t = np.clip((np.abs(x) - 0.012) / 0.044, 0, 1)
-    return np.asarray(0.021 + 0.007 * np.sin(np.pi * t * 0.85) - 0.003 * t)
+def brow_line(x: np.ndarray | float) -> np.ndarray:
+    """Design height (m) of the middle of the painted brow above frontal position ``x``.
+
+    A relaxed brow: its lower edge about 1 cm above the upper lid margin, nearly flat, a low arch peaking
+    two thirds of the way out (a high, round arch over a bare lid reads as surprise).
+    """
+    t = np.clip((np.abs(np.asarray(x, dtype=np.float64)) - 0.012) / 0.044, 0, 1)
+    return np.asarray(BROW_Y_D + 0.0035 * np.sin(np.pi * t * 0.85) - 0.002 * t)
 
 
 def _skin_colors(v: np.ndarray, m: np.ndarray, shape: HeadShape) -> np.ndarray:

@@ -23,6 +23,7 @@ from mien.rig.head_geometry import (
     Y_MOUTH_D,
     Z_CENTRE,
     HeadMesh,
+    brow_line,
     gauss,
     lid_heights,
     smoothstep,
@@ -201,15 +202,16 @@ def arkit_deltas(mesh: HeadMesh) -> dict[str, np.ndarray]:
     def brow(cx: float, cy: float, sx: float, eye: int) -> np.ndarray:
         return front * mesh.upper_lid_side[:, eye] * _gauss_asym(x, yd, cx, cy, sx, 0.02, 0.0065)
 
-    inner = brow(0.017, 0.021, 0.010, 0) + brow(-0.017, 0.021, 0.010, 1)
+    inner_y, mid_y, outer_y = (float(brow_line(bx)) for bx in (0.017, 0.031, 0.046))
+    inner = brow(0.017, inner_y, 0.010, 0) + brow(-0.017, inner_y, 0.010, 1)
     out["browInnerUp"] = vec(inner, (0.0, 0.009, 0.0005))
     for suffix, sgn, eye in (("Left", 1.0, 0), ("Right", -1.0, 1)):
-        whole = brow(sgn * 0.031, 0.023, 0.019, eye)
-        inner_side = brow(sgn * 0.017, 0.021, 0.010, eye)
+        whole = brow(sgn * 0.031, mid_y, 0.019, eye)
+        inner_side = brow(sgn * 0.017, inner_y, 0.010, eye)
         out[f"browDown{suffix}"] = vec(whole, (-sgn * 0.0035, -0.0060, 0.0015)) + vec(
             inner_side, (-sgn * 0.002, -0.001, 0.001)
         )
-        out[f"browOuterUp{suffix}"] = vec(brow(sgn * 0.046, 0.025, 0.012, eye), (0.0, 0.008, 0.0))
+        out[f"browOuterUp{suffix}"] = vec(brow(sgn * 0.046, outer_y, 0.012, eye), (0.0, 0.008, 0.0))
 
     # --- cheeks and nose ---
     ax = np.abs(x)
