@@ -52,6 +52,34 @@ Y_TOP_D = 0.118
 """Design height of the crown, metres."""
 Y_NECK_D = -0.222
 """Design height of the bottom of the neck, metres."""
+TEETH_DEPTH_M = 0.0075
+"""Depth of the front teeth's labial faces behind the lips' front at the midline, metres."""
+TEETH_SHOW_M = 0.0032
+"""How far the upper central incisors' edges reach below the lip line, metres (seen when the lips part)."""
+ARCH_DEPTH_M = 0.022
+"""How far the dental arch curves back from the midline to ``x`` = the mouth's half-width, metres."""
+
+# Teeth of one side of each row, midline outward: width along the arch, crown height, labio-lingual
+# thickness, and how far the edge stands back from the central incisor's (toward the gum), all metres.
+# Widths are adult mesio-distal crown widths (Wheeler's Dental Anatomy); heights include a hidden root part.
+_UPPER_TEETH = np.array(
+    [
+        [0.0086, 0.0110, 0.0032, 0.0000],  # central incisor
+        [0.0066, 0.0095, 0.0030, 0.0007],  # lateral incisor
+        [0.0076, 0.0105, 0.0048, 0.0002],  # canine
+        [0.0070, 0.0088, 0.0065, 0.0009],  # first premolar
+        [0.0066, 0.0082, 0.0065, 0.0012],  # second premolar
+    ]
+)
+_LOWER_TEETH = np.array(
+    [
+        [0.0054, 0.0095, 0.0030, 0.0000],
+        [0.0059, 0.0095, 0.0030, 0.0000],
+        [0.0069, 0.0105, 0.0045, -0.0003],
+        [0.0070, 0.0088, 0.0065, 0.0006],
+        [0.0071, 0.0085, 0.0065, 0.0009],
+    ]
+)
 BROW_Y_D = 0.0150
 """Design height of the middle of the brow at its inner end, metres above the eye centres."""
 Z_CENTRE = -0.07
@@ -504,32 +532,16 @@ def build_head_mesh(shape: HeadShape) -> HeadMesh:
     dark = srgb_to_linear((0.22, 0.06, 0.07))
     b.add(cav, sphere_faces[:, ::-1], dark, CAVITY, cav[:, :2])
 
-    # Teeth: an elliptic tube swept along a parabolic dental arch, with faint gaps between teeth.
-    for part, y_mid, set_back in ((TEETH_UPPER, ym + 0.0018, 0.0), (TEETH_LOWER, ym - 0.0040, 0.0025)):
-        arch = np.linspace(-1, 1, 41)
-        ang = np.linspace(0, 2 * np.pi, 10, endpoint=False)
-        wt, dt = mw * 0.78, 0.020
-        z0 = z_lips - 0.0095 - set_back
-        px, pz = wt * arch, z0 - dt * arch**2
-        tx, tz = wt * np.ones_like(arch), -2 * dt * arch
-        tn = np.hypot(tx, tz)
-        nx, nz = -tz / tn, tx / tn  # outward-facing normal of the arch (toward the lips)
-        hx = 0.0016 * np.cos(ang)
-        hy = 0.0042 * np.sin(ang)
-        pts = np.stack(
-            [
-                px[:, None] + nx[:, None] * hx[None, :],
-                y_mid + np.broadcast_to(hy[None, :], (len(arch), len(ang))),
-                pz[:, None] + nz[:, None] * hx[None, :],
-            ],
-            axis=-1,
-        ).reshape(-1, 3)
-        tube = np.arange(len(arch) * len(ang)).reshape(len(arch), len(ang))
-        ring_ids = np.concatenate([tube, tube[:, :1]], axis=1)
-        tri = _grid_faces([r for r in ring_ids])
-        gap = 0.72 + 0.28 * np.abs(np.sin(np.pi * (arch * 4.6 + 0.5))) ** 0.25
-        white = srgb_to_linear((0.95, 0.93, 0.86))
-        col = np.repeat(white[None, :] * gap[:, None], len(ang), axis=0)
+    # Teeth: one rounded block per tooth along a parabolic dental arch (incisors to second premolars), upper
+    # incisal edges just below the lip line, lower incisors behind them (overjet) with their edges a little
+    # higher than the upper edges (overbite), so parted lips show the upper row and an open jaw both rows.
+    z_arch = z_lips - TEETH_DEPTH_M
+    for part, teeth, y_edge, z_front, half_w in (
+        (TEETH_UPPER, _UPPER_TEETH, ym - TEETH_SHOW_M, z_arch, mw * 1.02),
+        (TEETH_LOWER, _LOWER_TEETH, ym - TEETH_SHOW_M + 0.0016, z_arch - 0.0034, mw * 0.96),
+    ):
+        upper = part == TEETH_UPPER
+        pts, tri, col = _dental_row(teeth, z_front, half_w, y_edge, upper)
         b.add(pts, tri, col, part, pts[:, :2])
 
     # Tongue: a flattened ellipsoid lying on the floor of the mouth.
@@ -608,6 +620,51 @@ def build_head_mesh(shape: HeadShape) -> HeadMesh:
         eye_seams=(eye_seams[0], eye_seams[1]),
         grid=grid.astype(np.int32),
     )
+
+
+def _dental_row(
+    teeth: np.ndarray, z_front: float, half_width: float, y_edge: float, upper: bool
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Vertices (k, 3), outward faces and linear colours (k, 3) of one row of teeth (both sides).
+
+    ``teeth`` rows are (width, height, thickness, edge set-back) in metres from the midline outward; the
+    labial faces lie on the arch ``z = z_front - ARCH_DEPTH_M * (x / half_width)**2``; ``y_edge`` is the
+    height of the central incisors' edges (the upper row hangs above it, the lower row stands below it).
+    """
+    gap = 0.00035  # dark seam between neighbouring teeth
+    xs = np.linspace(0.0, 2.0 * half_width, 801)
+    slope = -2.0 * ARCH_DEPTH_M * xs / half_width**2
+    arc = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(xs), np.diff(xs) * slope[1:]))])
+    unit, faces = _unit_sphere(6, 12)
+    # rounded block: a superellipsoid, boxy across and along the tooth, rounder front to back
+    boxy = np.sign(unit) * np.abs(unit) ** np.array([0.35, 0.3, 0.6])
+    ivory = srgb_to_linear((0.94, 0.91, 0.83))
+    pts, tri, col = [], [], []
+    n = 0
+    centres = np.cumsum(teeth[:, 0]) - teeth[:, 0] / 2
+    for side in (1.0, -1.0):
+        for (width, height, thick, set_back), s_mid in zip(teeth, centres, strict=True):
+            x_mid = float(np.interp(s_mid, arc, xs))
+            dzdx = -2.0 * ARCH_DEPTH_M * x_mid / half_width**2
+            tangent = np.array([1.0, 0.0, dzdx]) / np.hypot(1.0, dzdx)
+            normal = np.array([-dzdx, 0.0, 1.0]) / np.hypot(1.0, dzdx)  # toward the lips
+            tangent[0] *= side
+            normal[0] *= side
+            edge = y_edge + set_back if upper else y_edge - set_back
+            y_mid = edge + height / 2 if upper else edge - height / 2
+            base = np.array([side * x_mid, y_mid, z_front - ARCH_DEPTH_M * (x_mid / half_width) ** 2])
+            base -= normal * thick / 2
+            local = boxy * np.array([(width - gap) / 2, height / 2, thick / 2])
+            v = base + local[:, :1] * tangent + local[:, 1:2] * np.array([0.0, 1.0, 0.0]) + local[:, 2:] * normal
+            pts.append(v)
+            tri.append((faces if side > 0 else faces[:, ::-1]) + n)  # mirrored frame: flip the winding
+            # darker toward the back of the mouth and toward the gum (light reaches the front edges)
+            depth = (x_mid / half_width) ** 2
+            toward_gum = np.clip((v[:, 1] - edge) / height * (1 if upper else -1), 0.0, 1.0)
+            shade = (1.0 - 0.45 * depth) * (1.0 - 0.25 * toward_gum)
+            col.append(ivory[None, :] * shade[:, None])
+            n += len(v)
+    return np.vstack(pts), np.vstack(tri), np.vstack(col)
 
 
 def _side_field(
