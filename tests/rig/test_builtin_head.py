@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -210,3 +212,48 @@ def test_eye_look_is_a_rotation(rig: Rig) -> None:
     r1 = np.linalg.norm(after - rig.eye_centers[0], axis=1)
     np.testing.assert_allclose(r0, r1, atol=1e-6)
     assert moved(rig, "eyeLookUpLeft", rig.regions["eye_R"]) == 0.0
+
+
+def _render(rig: Rig, weights: np.ndarray | None, camera: str) -> np.ndarray:
+    from mien.render.camera import CAMERA_PRESETS
+    from mien.render.clip_render import render_still
+
+    return render_still(rig, weights, CAMERA_PRESETS[camera], (512, 512)).astype(np.int32)
+
+
+def _marked(rig: Rig, regions: dict[str, tuple[float, float, float]]) -> Rig:
+    """``rig`` with the vertices of ``regions`` painted a pure marker colour (to find them in a render)."""
+    colors = rig.vertex_colors.copy()
+    for region, rgb in regions.items():
+        colors[rig.regions[region]] = rgb
+    return dataclasses.replace(rig, vertex_colors=colors)
+
+
+def _pixels(rgb: np.ndarray, channel: int) -> np.ndarray:
+    """(k, 2) (row, column) of pixels where ``channel`` clearly dominates (a marker colour)."""
+    others = np.delete(rgb, channel, axis=2)
+    return np.argwhere((rgb[..., channel] > 60) & (others.max(axis=2) < 0.4 * rgb[..., channel]))
+
+
+@pytest.mark.parametrize("identity", ["default", "b"])
+def test_open_jaw_shows_rows_of_upper_and_lower_teeth(identity: str) -> None:
+    rig = _marked(builtin_head(identity), {"lips": (1, 0, 0), "teeth_upper": (0, 1, 0), "teeth_lower": (0, 0, 1)})
+    closed = _render(rig, None, "frontal-1m")
+    assert len(_pixels(closed, 1)) + len(_pixels(closed, 2)) < 5  # closed lips hide the teeth
+    weights = np.zeros(len(rig.targets), np.float32)
+    weights[rig.target_names.index("jawOpen")] = 1.0
+    rgb = _render(rig, weights, "frontal-1m")
+    lips, upper, lower = _pixels(rgb, 0), _pixels(rgb, 1), _pixels(rgb, 2)
+    mouth_width = np.ptp(lips[:, 1])
+    for teeth in (upper, lower):
+        assert len(teeth) > 150  # a row, not a sliver at the corners
+        assert np.ptp(teeth[:, 1]) > 0.6 * mouth_width  # spanning most of the mouth
+        middle = np.abs(teeth[:, 1] - lips[:, 1].mean()) < 0.15 * mouth_width
+        assert middle.sum() > 20  # the incisors show at the front, not only the side teeth
+    assert upper[:, 0].mean() < lower[:, 0].mean()  # upper row above the lower row
+    # parted lips (no jaw drop) already show the upper incisors just under the upper lip
+    weights[:] = 0.0
+    for name in ("mouthLowerDownLeft", "mouthLowerDownRight"):
+        weights[rig.target_names.index(name)] = 1.0
+    parted = _render(rig, weights, "frontal-1m")
+    assert len(_pixels(parted, 1)) > 60
