@@ -8,13 +8,16 @@ an iris and pupil: the caps within 30 / 10 degrees of straight ahead (+z) of the
 ICT-FaceKit's eyes are two shells (regions ``sclera_*`` and ``iris_*``): an outer one with a clear corneal
 bulge over an inner eyeball that carries the iris. The outer shell's cap is not drawn, and the inner one is
 painted. ICT's see-through helper meshes (eye occlusion shadows, lacrimal fluid, eye blend) and eyelash
-cards would cover the eyes if drawn opaque, so triangles wholly in :data:`HIDDEN_REGIONS` are not drawn.
+cards would cover the eyes if drawn opaque, so triangles wholly in :data:`HIDDEN_REGIONS` are not drawn; the
+eyes get painted lash lines instead, and the brows and the lips' vermilion are painted too, as a texture over
+these colours (:mod:`mien.render.face_paint`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from mien.render.face_paint import LIP_ALBEDO
 from mien.rig.model import Rig
 
 __all__ = ["HIDDEN_REGIONS", "REGION_ALBEDO", "SKIN_ALBEDO", "rig_vertex_colors", "visible_faces"]
@@ -23,7 +26,7 @@ SKIN_ALBEDO = (0.62, 0.40, 0.30)
 """Linear RGB albedo of skin (and of any vertex no other region claims)."""
 
 REGION_ALBEDO: dict[str, tuple[float, float, float]] = {
-    "lips": (0.55, 0.22, 0.20),
+    "lips": LIP_ALBEDO,
     "mouth_socket": (0.28, 0.07, 0.07),
     "gums_tongue": (0.55, 0.16, 0.16),
     "teeth": (0.80, 0.76, 0.66),
@@ -61,7 +64,7 @@ HIDDEN_REGIONS = (
     "eyelashes_R",
 )
 """Regions not drawn: see-through helper geometry, and ICT's eyelash cards (alpha-textured in the
-original; drawn opaque they read as thick dark bands)."""
+original; drawn opaque they read as thick dark bands, so the lash line is painted on the lid margin)."""
 
 
 def _eye_shells(rig: Rig, side: int) -> tuple[np.ndarray | None, np.ndarray]:

@@ -20,6 +20,7 @@ landmarks' depth, so the back of the head, which shares the frontal (x, y), stay
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -70,6 +71,12 @@ BROW_HEAD_FRACTION = 0.12
 """Fraction of a brow's length, from its inner end, over which its opacity rises to full and its top edge
 rounds off."""
 
+Height = float | Callable[[np.ndarray], np.ndarray]
+"""A band's height in metres: constant, or a function of the (k,) fractions along its curve."""
+
+Detail = Callable[[np.ndarray, np.ndarray], np.ndarray]
+"""Opacity factors (k,) of (k, 2) texel centres (metres) at (k,) fractions along a band's curve."""
+
 _PAINT_DEPTH_RAMP_M = 0.01
 """Paint fades in over this depth in front of the jaw landmarks (iBUG 0 and 16)."""
 
@@ -100,9 +107,7 @@ def _catmull_rom(points: np.ndarray, n_samples: int, closed: bool = False) -> np
     index = np.minimum(s.astype(np.int64), n_segments - 1)
     t = (s - index)[:, None]
     p0, p1, p2, p3 = (padded[index + k] for k in range(4))
-    return 0.5 * (
-        2 * p1 + (p2 - p0) * t + (2 * p0 - 5 * p1 + 4 * p2 - p3) * t**2 + (3 * p1 - p0 - 3 * p2 + p3) * t**3
-    )
+    return 0.5 * (2 * p1 + (p2 - p0) * t + (2 * p0 - 5 * p1 + 4 * p2 - p3) * t**2 + (3 * p1 - p0 - 3 * p2 + p3) * t**3)
 
 
 def _nearest_on_curve(points: np.ndarray, curve: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -171,12 +176,12 @@ class _Canvas:
 def _paint_band(
     canvas: _Canvas,
     curve: np.ndarray,
-    above: np.ndarray | float,
-    below: np.ndarray | float,
+    above: Height,
+    below: Height,
     albedo: tuple[float, float, float],
     opacity: float,
     edge: float,
-    detail: object = None,
+    detail: Detail | None = None,
 ) -> None:
     """Paint a band ``above`` / ``below`` the (m, 2) ``curve`` (heights in metres, or functions of the
     fraction along the curve giving them), with soft edges ``edge`` metres wide on either side."""
@@ -189,7 +194,7 @@ def _paint_band(
     bottom = below(fraction) if callable(below) else np.full(len(points), below)
     inside = np.minimum(top - offset, offset + bottom)
     alpha = _smoothstep(-edge, edge, inside) * _smoothstep(edge, -edge, beyond) * opacity
-    if callable(detail):
+    if detail is not None:
         alpha = alpha * detail(points, fraction)
     canvas.over(region, alpha, albedo)
 
@@ -205,7 +210,7 @@ def _inside_polygon(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
     return np.asarray(((crosses & (x < x_at)).sum(axis=1) % 2) == 1)
 
 
-def _brow_hairs(curve: np.ndarray, rng: np.random.Generator) -> object:
+def _brow_hairs(curve: np.ndarray, rng: np.random.Generator) -> Detail:
     """A detail function: opacity 0.8..1 from short hair strokes slanting up and outward at the inner end and
     lying along the brow toward the tail."""
 
@@ -256,9 +261,7 @@ def face_paint(rig: Rig, seed: int = 0) -> FacePaint | None:
     canvas.over(region, _smoothstep(-LIP_EDGE_M, LIP_EDGE_M, signed), LIP_ALBEDO)
 
     for lid in upper_lids:
-        _paint_band(
-            canvas, lid, lambda f: _profile(UPPER_LASH_HEIGHT_M, f), 0.0003, LASH_ALBEDO, 0.95, LASH_EDGE_M
-        )
+        _paint_band(canvas, lid, lambda f: _profile(UPPER_LASH_HEIGHT_M, f), 0.0003, LASH_ALBEDO, 0.95, LASH_EDGE_M)
     for lid in lower_lids:
         _paint_band(canvas, lid, 0.0001, LOWER_LASH_HEIGHT_M, LASH_ALBEDO, 0.4, LASH_EDGE_M)
     for brow in brows:

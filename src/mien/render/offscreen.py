@@ -146,11 +146,12 @@ class OffscreenRenderer:
 
     ``faces`` (m, 3) int32 triangles; ``vertex_colors`` (n, 3) linear RGB albedo in 0..1 (None: a skin
     tone); ``texture`` (th, tw, 4) float premultiplied linear RGB albedo and opacity in 0..1, painted over the
-vertex colours where ``texcoords`` (n, 3) say (u, v in 0..1, row 0 of ``texture`` at v = 0, and the paint's
-strength at the vertex 0..1; see :mod:`mien.render.face_paint`); ``background`` 8-bit sRGB; ``samples`` multisample anti-aliasing (0 = off, 4 = default; about
-    doubles the cost per frame on llvmpipe); ``cull_back_faces`` skips triangles facing away from the camera
-    (a third faster; right for closed, consistently wound meshes); ``backend`` the moderngl standalone
-    backend (``"egl"``; None = the platform default, see the module doc).
+    vertex colours where ``texcoords`` (n, 3) say (u, v in 0..1 with row 0 of ``texture`` at v = 0, and the
+    paint's strength at the vertex, 0..1; see :mod:`mien.render.face_paint`); ``background`` 8-bit sRGB;
+    ``samples`` multisample anti-aliasing (0 = off, 4 = default; about doubles the cost per frame on
+    llvmpipe); ``cull_back_faces`` skips triangles facing away from the camera (a third faster; right for
+    closed, consistently wound meshes); ``backend`` the moderngl standalone backend (``"egl"``; None = the
+    platform default, see the module doc).
     Buffers are allocated on the first :meth:`render` and rewritten in place afterwards. Use as a context
     manager (or call :meth:`close`) to free the OpenGL context. Not thread-safe: render from one thread.
     """
