@@ -10,7 +10,7 @@ import pytest
 
 from mien.errors import InvalidValueError
 from mien.render.camera import CAMERA_PRESETS
-from mien.render.face_paint import BROW_ALBEDO, LIP_ALBEDO, face_paint
+from mien.render.face_paint import BROW_ALBEDO, LIP_ALBEDO, _paint, face_paint
 from mien.render.offscreen import OffscreenRenderer
 from mien.rig.builtin_head import builtin_head
 from mien.rig.model import Rig
@@ -106,9 +106,10 @@ def pixel(rig: Rig, point: np.ndarray) -> tuple[int, int]:
 
 
 def test_ict_paint_is_deterministic_and_stays_on_the_front(ict_rig: Rig) -> None:
-    paint, again = face_paint(ict_rig), face_paint(ict_rig)
-    assert paint is not None and again is not None
-    assert np.array_equal(paint.texture, again.texture)
+    paint, fresh = face_paint(ict_rig), _paint(ict_rig, 0)
+    assert paint is not None and fresh is not None
+    assert face_paint(ict_rig) is paint  # cached
+    assert np.array_equal(paint.texture, fresh.texture)
     assert paint.texcoords.shape == (ict_rig.n_vertices, 3)
     strength = paint.texcoords[:, 2]
     assert np.all(strength[ict_rig.landmarks[17:68]] == 1.0)

@@ -20,6 +20,7 @@ landmarks' depth, so the back of the head, which shares the frontal (x, y), stay
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -76,6 +77,9 @@ Height = float | Callable[[np.ndarray], np.ndarray]
 
 Detail = Callable[[np.ndarray, np.ndarray], np.ndarray]
 """Opacity factors (k,) of (k, 2) texel centres (metres) at (k,) fractions along a band's curve."""
+
+_CACHE: weakref.WeakKeyDictionary[Rig, dict[int, FacePaint | None]] = weakref.WeakKeyDictionary()
+"""Paint already made for a rig (rigs are immutable), by seed: painting takes a few tenths of a second."""
 
 _PAINT_DEPTH_RAMP_M = 0.01
 """Paint fades in over this depth in front of the jaw landmarks (iBUG 0 and 16)."""
@@ -237,8 +241,15 @@ def face_paint(rig: Rig, seed: int = 0) -> FacePaint | None:
     """Brows, lash lines and lip colour for ``rig`` (see the module doc), or None when it has none to get.
 
     None when the rig paints itself (``vertex_colors``) or its landmarks are degenerate (brows less than 2 cm
-    wide). ``seed`` fixes the brows' hair strokes.
+    wide). ``seed`` fixes the brows' hair strokes. The result is cached per rig and seed (its arrays are read-only).
     """
+    cached = _CACHE.setdefault(rig, {})
+    if seed not in cached:
+        cached[seed] = _paint(rig, seed)
+    return cached[seed]
+
+
+def _paint(rig: Rig, seed: int) -> FacePaint | None:
     if rig.vertex_colors is not None or len(rig.landmarks) != 68:
         return None
     points = rig.neutral[np.asarray(rig.landmarks, np.int64)].astype(np.float64)
@@ -289,4 +300,6 @@ def face_paint(rig: Rig, seed: int = 0) -> FacePaint | None:
     # Transparent border texels: clamping outside the canvas samples nothing.
     canvas.rgba[[0, -1]] = 0.0
     canvas.rgba[:, [0, -1]] = 0.0
+    canvas.rgba.flags.writeable = False
+    texcoords.flags.writeable = False
     return FacePaint(texture=canvas.rgba, texcoords=texcoords)
