@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -257,3 +258,21 @@ def test_open_jaw_shows_rows_of_upper_and_lower_teeth(identity: str) -> None:
         weights[rig.target_names.index(name)] = 1.0
     parted = _render(rig, weights, "frontal-1m")
     assert len(_pixels(parted, 1)) > 60
+
+
+@pytest.mark.parametrize("identity", ["default", "b"])
+def test_neutral_face_does_not_read_surprised(identity: str, landmarker_path: Path, emotion_model_path: Path) -> None:
+    from mien.validate.detector import EMOTION_LABELS
+    from mien.validate.face_detector import FaceDetector
+
+    detector = FaceDetector(landmarker_path, emotion_model_path)
+    try:
+        for camera in ("frontal-1m", "frontal-3m"):
+            rgb = _render(builtin_head(identity), None, camera).astype(np.uint8)
+            found = detector.detect(rgb)
+            assert found.found and found.emotions is not None, camera
+            p = dict(zip(EMOTION_LABELS, found.emotions.tolist(), strict=True))
+            assert p["surprise"] < 0.08 and found.top_emotion not in ("surprise", "happy"), (camera, p)
+            assert p["neutral"] > 0.12, (camera, p)  # the old wide-eyed, high-browed head read 0.00-0.03
+    finally:
+        detector.close()
