@@ -231,7 +231,6 @@ class OffscreenRenderer:
             self._paint.repeat_x = self._paint.repeat_y = False
             self._paint.build_mipmaps()
             self._paint.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
-            self._paint.anisotropy = 8.0
             self._paint.use(0)
             self._program["u_paint"].value = 0
             self._ctx.enable(self._ctx.DEPTH_TEST)
