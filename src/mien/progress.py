@@ -12,8 +12,9 @@ T = TypeVar("T")
 
 
 def progress(items: Iterable[T], total: int | None = None, desc: str = "", enabled: bool = True) -> Iterator[T]:
-    """Yield ``items`` while showing a progress bar on stderr (silent when ``enabled`` is False)."""
-    if not enabled:
+    """Yield ``items`` while showing a progress bar on stderr (silent when ``enabled`` is False or stderr is not a
+    terminal, so logs and pipes get no bar noise)."""
+    if not enabled or not sys.stderr.isatty():
         yield from items
         return
     try:

@@ -14,5 +14,6 @@ COMMAND_MODULES: tuple[str, ...] = (
     "track",
     "learn",
     "laugh",
+    "validate",
 )
 """Subcommand modules under :mod:`mien.commands`, in ``mien --help`` order."""

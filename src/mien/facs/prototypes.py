@@ -11,11 +11,22 @@ from mien.errors import UnknownNameError
 from mien.facs.catalogue import FACE_CHANNELS, au_channels
 from mien.facs.intensity import check_intensity, parse_au
 
-__all__ = ["EMFACS_PROTOTYPES", "prototype_vector"]
+__all__ = ["EMFACS_PROTOTYPES", "PROTOTYPES_VERSION", "prototype_vector"]
+
+
+def _text() -> str:
+    return resources.files("mien.facs").joinpath("data/emfacs_prototypes.csv").read_text(encoding="utf-8")
+
+
+def _version() -> str:
+    for line in _text().splitlines():
+        if line.startswith("#") and line[1:].strip().lower().startswith("version:"):
+            return line.split(":", 1)[1].strip()
+    return ""
 
 
 def _load() -> dict[str, dict[str, float]]:
-    text = resources.files("mien.facs").joinpath("data/emfacs_prototypes.csv").read_text(encoding="utf-8")
+    text = _text()
     rows = csv.DictReader(line for line in text.splitlines() if not line.startswith("#"))
     table: dict[str, dict[str, float]] = {}
     for row in rows:
@@ -31,7 +42,10 @@ def _load() -> dict[str, dict[str, float]]:
 
 
 EMFACS_PROTOTYPES: dict[str, dict[str, float]] = _load()
-"""Emotion -> {``"AU6"``: 3.0, ...}: the prototype AUs and their intensities (0..5)."""
+"""Emotion -> {``"AU6"``: 3.5, ...}: the prototype AUs and their intensities (0..5) at emotion intensity 1."""
+
+PROTOTYPES_VERSION: str = _version()
+"""The ``# version:`` of the shipped prototype table (``"2"``)."""
 
 
 def prototype_vector(emotion: str) -> np.ndarray:

@@ -23,7 +23,7 @@ def contact_sheet(
 ) -> np.ndarray:
     """One (H, W, 3) uint8 image tiling ``images`` ((h, w, 3) uint8 each) row by row, ``labels`` under each.
 
-    ``columns`` defaults to a near-square grid (ceil(sqrt(n))). Tiles of different sizes are centred in
+    ``columns`` defaults to a near-square grid (ceil(sqrt(n))). A label may have several lines (``"\n"``). Tiles of different sizes are centred in
     cells as large as the largest image. ``padding`` pixels separate the cells; ``font_size`` is the label
     height in pixels (Pillow's default font).
 
@@ -57,7 +57,8 @@ def contact_sheet(
     rows = math.ceil(len(checked) / columns)
     tile_h = max(image.shape[0] for image in checked)
     tile_w = max(image.shape[1] for image in checked)
-    label_h = int(font_size * 1.5) if any(labels) else 0
+    lines = max(label.count("\n") + 1 for label in labels)
+    label_h = int(font_size * 1.5 * lines) if any(labels) else 0
     cell_h = tile_h + label_h
     sheet = Image.new("RGB", (columns * tile_w + (columns + 1) * padding, rows * (cell_h + padding) + padding))
     sheet.paste(tuple(background), (0, 0, *sheet.size))
@@ -69,11 +70,12 @@ def contact_sheet(
         top = padding + row * (cell_h + padding)
         h, w = image.shape[:2]
         sheet.paste(Image.fromarray(image), (left + (tile_w - w) // 2, top + (tile_h - h) // 2))
-        if label:
-            text = str(label)
-            # Shorten a label that does not fit under its tile.
+        for line_number, line in enumerate(str(label).split("\n") if label else []):
+            text = line
+            # Shorten a line that does not fit under its tile.
             while len(text) > 1 and draw.textlength(text, font=font) > tile_w:
                 text = text[:-2] + "…"
             width = draw.textlength(text, font=font)
-            draw.text((left + (tile_w - width) / 2, top + tile_h + font_size * 0.2), text, fill=text_color, font=font)
+            y = top + tile_h + font_size * (0.2 + 1.5 * line_number)
+            draw.text((left + (tile_w - width) / 2, y), text, fill=text_color, font=font)
     return np.asarray(sheet)

@@ -21,7 +21,7 @@ from mien.errors import InvalidValueError, MissingExtraError
 from mien.paths import require_asset
 from mien.validate.detector import EMOTION_LABELS
 
-__all__ = ["CROP_SCALE", "EmotionClassifier", "face_crop"]
+__all__ = ["CROP_SCALE", "EmotionClassifier", "crop_square", "face_box", "face_crop"]
 
 CROP_SCALE = 1.15
 """Side of the square crop relative to the larger side of the iBUG-68 points' bounding box (fer's 10 px a
@@ -31,30 +31,42 @@ INPUT_SIZE = 64
 """The model's input side in pixels."""
 
 
-def face_crop(rgb: np.ndarray, landmarks: np.ndarray, scale: float = CROP_SCALE, size: int = INPUT_SIZE) -> np.ndarray:
-    """(size, size) float32 grey crop in 0..1 of the square around ``landmarks`` ((68, 2) iBUG or (478, 2)
-    MediaPipe pixel coordinates x, y).
-
-    Pixels outside the image are edge-replicated; the grey is ITU-R BT.601 luma, as OpenCV's ``COLOR_RGB2GRAY``.
-    """
-    from PIL import Image
-
+def face_box(landmarks: np.ndarray, scale: float = CROP_SCALE) -> tuple[int, int, int]:
+    """``(x0, y0, side)`` pixels of the square crop around ``landmarks`` ((68, 2) iBUG or (478, 2) MediaPipe)."""
     points = np.asarray(landmarks, dtype=np.float64)[:, :2]
     if len(points) >= 468:
         from mien.tracking.ibug68 import ibug68
 
         points = ibug68(points)
+    if not np.all(np.isfinite(points)):
+        raise InvalidValueError("landmarks", "non-finite coordinates", "finite pixel coordinates")
     lo, hi = points.min(axis=0), points.max(axis=0)
     centre = (lo + hi) / 2.0
     half = max(float((hi - lo).max()) * scale / 2.0, 4.0)
-    height, width = rgb.shape[:2]
-    x0, y0 = int(round(centre[0] - half)), int(round(centre[1] - half))
-    side = int(round(2 * half))
+    return int(round(centre[0] - half)), int(round(centre[1] - half)), int(round(2 * half))
+
+
+def crop_square(image: np.ndarray, box: tuple[int, int, int]) -> np.ndarray:
+    """The square ``box`` (x0, y0, side) of ``image`` ((h, w, ...)), edge pixels repeated outside it."""
+    x0, y0, side = box
+    height, width = image.shape[:2]
     xs = np.clip(np.arange(x0, x0 + side), 0, width - 1)
     ys = np.clip(np.arange(y0, y0 + side), 0, height - 1)
+    return np.asarray(image[np.ix_(ys, xs)])
+
+
+def face_crop(rgb: np.ndarray, landmarks: np.ndarray, scale: float = CROP_SCALE, size: int = INPUT_SIZE) -> np.ndarray:
+    """(size, size) float32 grey crop in 0..1 of the square around ``landmarks`` (see :func:`face_box`).
+
+    Pixels outside the image are edge-replicated; the grey is ITU-R BT.601 luma, as OpenCV's ``COLOR_RGB2GRAY``.
+    """
+    from PIL import Image
+
     grey = rgb[..., :3].astype(np.float32) @ np.array([0.299, 0.587, 0.114], np.float32)
-    patch = grey[np.ix_(ys, xs)]
-    resized = Image.fromarray(patch.astype(np.uint8)).resize((size, size), Image.Resampling.BILINEAR)
+    patch = crop_square(grey, face_box(landmarks, scale))
+    resized = Image.fromarray(np.clip(patch + 0.5, 0, 255).astype(np.uint8)).resize(
+        (size, size), Image.Resampling.BILINEAR
+    )
     return np.asarray(resized, dtype=np.float32) / 255.0
 
 

@@ -223,7 +223,7 @@ class RecognitionResult:
     timings_s: dict[str, float]
     """Seconds spent per stage (``render``, ``detect``, ``load``)."""
     images: dict[int, np.ndarray] = field(default_factory=dict, repr=False)
-    """Index into :attr:`scores` -> the rendered (h, w, 3) uint8 image (kept when asked)."""
+    """Index into :attr:`scores` -> the (s, s, 3) uint8 colour crop the classifier judged (kept when asked)."""
 
     def subset(self, **conditions: Any) -> list[StimulusScore]:
         """Scores whose stimulus matches every ``field=value`` (a value may be a tuple of allowed values)."""
@@ -299,6 +299,16 @@ def _json_default(value: object) -> object:
     raise TypeError(f"not JSON serialisable: {type(value).__name__}")
 
 
+def _judged_crop(rgb: np.ndarray, landmarks: np.ndarray, side: int = 160) -> np.ndarray:
+    """The colour version of the square the classifier saw, ``side`` pixels wide."""
+    from PIL import Image
+
+    from mien.validate.emotion_classifier import crop_square, face_box
+
+    patch = crop_square(rgb, face_box(landmarks))
+    return np.asarray(Image.fromarray(patch).resize((side, side), Image.Resampling.BILINEAR))
+
+
 def run_recognition(
     stimuli: Sequence[Stimulus],
     detector: Detector | None = None,
@@ -358,8 +368,8 @@ def run_recognition(
                         aus,
                         nose_lip,
                     )
-                    if keep_images:
-                        images[index] = rgb
+                    if keep_images and found.landmarks is not None:
+                        images[index] = _judged_crop(rgb, found.landmarks)
                     next(ticker, None)
     finally:
         if own:
@@ -368,3 +378,51 @@ def run_recognition(
         pass
     done = tuple(s for s in scores if s is not None)
     return RecognitionResult(done, active.name, {k: round(v, 3) for k, v in timings.items()}, images)
+
+
+def _sheet_label(score: StimulusScore) -> str:
+    s = score.stimulus
+    order = np.argsort(score.emotions)[::-1]
+    probs = " ".join(f"{EMOTION_LABELS[int(i)][:3]} {score.emotions[int(i)]:.2f}" for i in order[:2])
+    mark = {True: "ok", False: "MISS", None: ""}[score.correct()]
+    level = "" if s.expression == "neutral" else f" x{s.intensity:g}"
+    return f"{s.expression}{level} {mark}\n{probs}"
+
+
+def write_recognition(result: RecognitionResult, out_dir: str | Path) -> dict[str, Path]:
+    """Write ``recognition.json``, the judged contact sheets (one per head/identity/basis/view) and the figures.
+
+    Every file is written under a temporary name and renamed when complete; ``recognition.json`` goes last.
+    """
+    from mien.render.contact_sheet import contact_sheet
+    from mien.render.video import write_png
+    from mien.validate.figures import plot_confusion, plot_quality
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    written: dict[str, Path] = {}
+    groups: dict[tuple[str, str, str, str], list[int]] = {}
+    for index, score in enumerate(result.scores):
+        s = score.stimulus
+        groups.setdefault((s.head, s.identity, s.basis, s.view), []).append(index)
+    for (head, identity, basis, view), indices in groups.items():
+        shown = [i for i in indices if i in result.images]
+        if not shown:
+            continue
+        name = f"sheet_{head}_{identity}_{basis}_{view}.png"
+        columns = 1 + len({result.scores[i].stimulus.intensity for i in shown if result.scores[i].stimulus.intensity})
+        sheet = contact_sheet(
+            [result.images[i] for i in shown],
+            [_sheet_label(result.scores[i]) for i in shown],
+            columns=max(columns, 2) * 3 + 1,
+            font_size=12,
+        )
+        partial = out / f".{name}.partial.png"
+        write_png(sheet, partial)
+        written[name] = partial.replace(out / name)
+    for name, draw in (("confusion.png", plot_confusion), ("quality.png", plot_quality)):
+        partial = out / f".{name}.partial.png"
+        draw(result, partial)
+        written[name] = partial.replace(out / name)
+    written["recognition.json"] = result.write_json(out / "recognition.json")
+    return written

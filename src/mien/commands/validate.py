@@ -1,0 +1,253 @@
+"""``mien validate``: measure how the faces read to detectors (rig fidelity, emotion recognition, OpenFACS
+comparison with a human video) and write a citable HTML report."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+__all__ = ["parse_heads", "register"]
+
+_VIEWS_STUDY = ("frontal-1m", "frontal-3m", "oblique-1m", "oblique-3m", "lateral-1m", "lateral-3m")
+
+
+def parse_heads(specs: list[str] | None) -> list[tuple[str, str]]:
+    """``["ict:a", "builtin"]`` -> ``[("ict", "a"), ("builtin", "default")]``; None -> every installed head.
+
+    Installed heads: the built-in head (identities default and b) and, when ICT-FaceKit is installed, its
+    identities a and b (the study's two morphologies).
+    """
+    from mien.errors import UnknownNameError
+    from mien.rig.heads import ict_installed
+
+    if not specs:
+        heads = [("builtin", "default"), ("builtin", "b")]
+        return ([("ict", "a"), ("ict", "b")] + heads) if ict_installed() else heads
+    out = []
+    for spec in specs:
+        for item in spec.split(","):
+            head, _, identity = item.strip().partition(":")
+            if head == "default":
+                head = "ict" if ict_installed() else "builtin"
+            if head not in ("ict", "builtin"):
+                raise UnknownNameError("head", head, ("builtin", "ict", "default"))
+            out.append((head, identity or ("a" if head == "ict" else "default")))
+    return out
+
+
+def _check_heads(heads: list[tuple[str, str]]) -> None:
+    """Fail early, naming the head, when a head or identity is unknown or not installed."""
+    from mien.errors import MissingAssetError, UnknownNameError
+    from mien.rig.builtin_head import BUILTIN_IDENTITIES
+    from mien.rig.heads import ict_installed
+
+    for head, identity in heads:
+        if head == "ict":
+            if not ict_installed():
+                raise MissingAssetError(
+                    "head 'ict' is not installed: point MIEN_ICT_FACEKIT (or [assets] ict_facekit in the config "
+                    "file) at the ICT-FaceKit folder that holds FaceXModel/ (see `mien assets`)"
+                )
+            from mien.rig.ict_facekit import ict_identity_presets
+
+            if identity not in ict_identity_presets():
+                raise UnknownNameError("ICT identity", identity, tuple(ict_identity_presets()))
+        elif identity not in BUILTIN_IDENTITIES:
+            raise UnknownNameError("built-in identity", identity, tuple(BUILTIN_IDENTITIES))
+
+
+def _add_common(parser: argparse.ArgumentParser, default_out: str) -> None:
+    parser.add_argument("-o", "--out", type=Path, default=Path(default_out), help="output folder (default %(default)s)")
+    parser.add_argument(
+        "--head",
+        action="append",
+        metavar="HEAD[:IDENTITY]",
+        help="head to validate, repeatable or comma-separated: ict:a, ict:b, builtin:default, builtin:b "
+        "(default: every installed head and identity)",
+    )
+    parser.add_argument("--landmarker", help="face_landmarker.task (default: $MIEN_FACE_LANDMARKER or the config)")
+    parser.add_argument(
+        "--emotion-model", help="emotion classifier .tflite (default: $MIEN_EMOTION_MODEL or the config)"
+    )
+    parser.add_argument("--size", default="512x512", help="render size WIDTHxHEIGHT (default %(default)s)")
+    parser.add_argument("--quiet", action="store_true", help="no progress bars")
+
+
+def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """Add ``validate`` and its subcommands."""
+    parser = subparsers.add_parser(
+        "validate",
+        help="measure how the faces read: rig fidelity, emotion recognition, human-video comparison, HTML report",
+        description="Render mien's faces, run detectors over them (MediaPipe Face Landmarker, the FER emotion "
+        "classifier) and measure: each AU commanded vs detected (rig), the study's emotions recognised "
+        "(emotions), a human video vs the character (compare), and all of it in one HTML page (report).",
+    )
+    sub = parser.add_subparsers(dest="validate_command", metavar="WHAT")
+
+    rig = sub.add_parser("rig", help="every AU at A..E on each head: commanded vs detected, cross-talk")
+    _add_common(rig, "mien-validate/rig")
+    rig.add_argument("--aus", help="AU numbers, comma-separated (default: the 18 OpenFACS AUs)")
+    rig.set_defaults(handler=run_rig)
+
+    emotions = sub.add_parser("emotions", help="the study's 6 emotions and 4 blends: recognition, confusion, quality")
+    _add_common(emotions, "mien-validate/emotions")
+    emotions.add_argument(
+        "--views",
+        default=",".join(_VIEWS_STUDY),
+        help="camera views, comma-separated from " + ", ".join(_VIEWS_STUDY) + " (default: all)",
+    )
+    emotions.add_argument("--intensities", default="1.2,2.4", help="emotion intensities (default %(default)s)")
+    emotions.add_argument(
+        "--basis", default="facs,feature-points", help="expression bases: facs, feature-points (default both)"
+    )
+    emotions.add_argument("--expressions", help="comma-separated subset of the ten expressions (default all)")
+    emotions.set_defaults(handler=run_emotions)
+
+    compare = sub.add_parser("compare", help="a human video vs the character (OpenFACS Fig. 5, and the closed loop)")
+    compare.add_argument("video", type=Path, help="video of a person performing the expression")
+    _add_common(compare, "mien-validate/compare")
+    compare.add_argument("--expression", help="emotion, blend or AUs the person performs (e.g. joy); "
+                         "without it only the closed loop runs")  # fmt: skip
+    compare.add_argument("--camera", default="frontal-1m", help="camera preset (default %(default)s)")
+    compare.add_argument("--length", type=int, default=100, help="time samples per activation map (default 100)")
+    compare.set_defaults(handler=run_compare_command)
+
+    report = sub.add_parser("report", help="everything above in one self-contained HTML page")
+    _add_common(report, "mien-validate")
+    report.add_argument("--video", type=Path, help="human video for the comparison section (optional)")
+    report.add_argument("--expression", default="joy", help="expression the video shows (default %(default)s)")
+    report.set_defaults(handler=run_report)
+    parser.set_defaults(handler=lambda args: parser.print_help() or 0)
+
+
+def _size(args: argparse.Namespace) -> tuple[int, int]:
+    from mien.commands._scene import parse_size
+
+    return parse_size(args.size)
+
+
+def _list(text: str, field: str, parse: Any = str) -> list[Any]:
+    from mien.errors import InvalidValueError
+
+    items = [item.strip() for item in text.split(",") if item.strip()]
+    try:
+        values = [parse(item) for item in items]
+    except ValueError:
+        raise InvalidValueError(field, text, "a comma-separated list") from None
+    if not values:
+        raise InvalidValueError(field, text, "at least one value")
+    return values
+
+
+def _detector(args: argparse.Namespace, emotions: bool = True) -> Any:
+    from mien.paths import require_asset
+    from mien.validate.face_detector import FaceDetector
+
+    require_asset("face_landmarker", args.landmarker)
+    if emotions:
+        require_asset("emotion_model", args.emotion_model)
+    return FaceDetector(args.landmarker, args.emotion_model, emotions=emotions)
+
+
+def emotions_result(args: argparse.Namespace, heads: list[tuple[str, str]]) -> Any:
+    """Run the recognition study for ``heads`` from the parsed options."""
+    from mien.validate.recognition import EXPRESSIONS, run_recognition, study_stimuli
+
+    bases = [b.replace("-", "_") for b in _list(args.basis, "basis")]
+    views = _list(getattr(args, "views", ",".join(_VIEWS_STUDY)), "views")
+    intensities = _list(getattr(args, "intensities", "1.2,2.4"), "intensities", float)
+    expressions = _list(args.expressions, "expressions") if getattr(args, "expressions", None) else list(EXPRESSIONS)
+    stimuli = study_stimuli(heads, bases, views, intensities, expressions)
+    detector = _detector(args)
+    try:
+        return run_recognition(stimuli, detector, _size(args), keep_images=True, progress=not args.quiet)
+    finally:
+        detector.close()
+
+
+def run_emotions(args: argparse.Namespace) -> int:
+    """``mien validate emotions``."""
+    from mien.validate.recognition import EXPRESSIONS, write_recognition
+
+    heads = parse_heads(args.head)
+    _check_heads(heads)
+    result = emotions_result(args, heads)
+    written = write_recognition(result, args.out)
+    basics = ("joy", "sadness", "anger", "surprise", "fear")
+    print(f"recognised (top label; blends: top two) over {len(result.scores)} renders:")
+    for name in ("neutral", *EXPRESSIONS):
+        print(f"  {name:13s} {result.rate(expression=name):6.0%}   quality {result.quality(name):.2f}")
+    frontal = result.rate(expression=basics, view=("frontal-1m", "frontal-3m"))
+    print(f"joy, sadness, anger, surprise, fear, frontal: {frontal:.0%}")
+    print(f"wrote {len(written)} files to {args.out} (recognition.json, sheet_*.png, confusion.png, quality.png)")
+    return 0
+
+
+def run_rig(args: argparse.Namespace) -> int:
+    """``mien validate rig``."""
+    from mien.facs.catalogue import OPENFACS_AUS
+    from mien.validate.rig_fidelity import run_rig_fidelity
+
+    heads = parse_heads(args.head)
+    _check_heads(heads)
+    aus = _list(args.aus, "aus", int) if args.aus else list(OPENFACS_AUS)
+    detector = _detector(args, emotions=False)
+    try:
+        result = run_rig_fidelity(heads, aus, size=_size(args), detector=detector, progress=not args.quiet)
+    finally:
+        detector.close()
+    written = result.write(args.out)
+    print(result.summary() if hasattr(result, "summary") else f"rig fidelity of {len(heads)} head(s)")
+    print(f"wrote {args.out}: {', '.join(sorted(Path(str(p)).name for p in _paths(written)))}")
+    return 0
+
+
+def _paths(written: Any) -> list[Any]:
+    if isinstance(written, dict):
+        return list(written.values())
+    if isinstance(written, list | tuple):
+        return list(written)
+    return [written]
+
+
+def run_compare_command(args: argparse.Namespace) -> int:
+    """``mien validate compare VIDEO``."""
+    from mien.validate.compare import run_compare
+
+    heads = parse_heads(args.head)[:1] if args.head else [("default", "")]
+    head, identity = heads[0]
+    if head != "default":
+        _check_heads(heads)
+    result = run_compare(
+        args.video,
+        args.expression,
+        head=head,
+        identity=identity or None,
+        camera=args.camera,
+        size=_size(args),
+        length=args.length,
+        progress=not args.quiet,
+        landmarker=args.landmarker,
+    )
+    written = result.write(args.out)
+    print(f"closed loop (human -> character -> detector): r = {result.closed_loop.r:.2f}")
+    if result.expression is not None:
+        print(f"{args.expression}: human vs character activation maps r = {result.expression.r:.2f}")
+    print(f"wrote {args.out}: {', '.join(sorted(Path(str(p)).name for p in _paths(written)))}")
+    return 0
+
+
+def run_report(args: argparse.Namespace) -> int:
+    """``mien validate report``: rig, emotions and (with --video) compare, then one HTML page."""
+    from mien.validate.report import build_report
+
+    heads = parse_heads(args.head)
+    _check_heads(heads)
+    if args.video is not None and not Path(args.video).is_file():
+        from mien.errors import InvalidValueError
+
+        raise InvalidValueError("video", str(args.video), "an existing video file of a person")
+    path = build_report(args, heads)
+    print(f"wrote {path}")
+    return 0
