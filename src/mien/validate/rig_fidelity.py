@@ -809,7 +809,8 @@ def run_rig_fidelity(
                 "ICT-FaceKit is not installed: set MIEN_ICT_FACEKIT to the ICT-FaceKit folder (holds FaceXModel/)"
             )
     view = camera_from_options(camera)
-    model = require_asset("face_landmarker", landmarker if detector is None else getattr(detector, "model_path", landmarker))
+    given_model = landmarker if detector is None else getattr(detector, "model_path", landmarker)
+    model = require_asset("face_landmarker", given_model)
     detected_codes = (*OPENFACS_AUS, *(c for c in commanded if c not in OPENFACS_AUS))
     solver = AUSolver(aus=detected_codes)
     own_detector = detector is None
