@@ -32,7 +32,11 @@ INPUT_SIZE = 64
 
 
 def face_box(landmarks: np.ndarray, scale: float = CROP_SCALE) -> tuple[int, int, int]:
-    """``(x0, y0, side)`` pixels of the square crop around ``landmarks`` ((68, 2) iBUG or (478, 2) MediaPipe)."""
+    """``(x0, y0, side)`` pixels of the square crop around ``landmarks`` ((68, 2) iBUG or (478, 2) MediaPipe).
+
+    The side is :data:`CROP_SCALE` times the larger extent of the 68 points; the centre is the middle of their
+    vertical extent and of the inner features' horizontal extent.
+    """
     points = np.asarray(landmarks, dtype=np.float64)[:, :2]
     if len(points) >= 468:
         from mien.tracking.ibug68 import ibug68
@@ -42,6 +46,11 @@ def face_box(landmarks: np.ndarray, scale: float = CROP_SCALE) -> tuple[int, int
         raise InvalidValueError("landmarks", "non-finite coordinates", "finite pixel coordinates")
     lo, hi = points.min(axis=0), points.max(axis=0)
     centre = (lo + hi) / 2.0
+    if len(points) == 68:
+        # Horizontally, centre on the inner features (brows, eyes, nose, mouth): in a turned face the near jaw
+        # line reaches back to the ear and would pull a plain bounding box off the face.
+        inner = points[17:]
+        centre[0] = (inner[:, 0].min() + inner[:, 0].max()) / 2.0
     half = max(float((hi - lo).max()) * scale / 2.0, 4.0)
     return int(round(centre[0] - half)), int(round(centre[1] - half)), int(round(2 * half))
 
