@@ -9,7 +9,7 @@ def test_help_lists_every_subcommand(capsys):
     with pytest.raises(SystemExit):
         main(["--help"])
     out = capsys.readouterr().out
-    for command in ("demo", "emote", "au", "render", "assets", "track", "learn", "laugh"):
+    for command in ("demo", "emote", "au", "render", "assets", "track", "learn", "laugh", "validate"):
         assert command in out
     assert build_parser().prog == "mien"
 
@@ -19,7 +19,7 @@ def test_emote_saves_curves_and_plot(tmp_path, capsys):
     assert main(["emote", "joy", "--intensity", "2.4", "--duration", "2", "-o", str(csv), "--plot", str(png)]) == 0
     clip = reader_for(csv)(csv)
     assert clip.n_frames == 120 and clip.fps == pytest.approx(60.0)
-    assert clip.channel("AU12L").max() == pytest.approx(5.0)  # 2.4 x D saturates at E
+    assert clip.channel("AU12L").max() == pytest.approx(5.0, abs=0.01)  # 2.4 x 3.5 saturates softly toward E
     assert png.stat().st_size > 10_000 and png.read_bytes()[:4] == b"\x89PNG"
 
 

@@ -41,7 +41,7 @@ def mapping() -> AUMapping:
 
 
 def test_default_table_shape_and_version(mapping: AUMapping) -> None:
-    assert mapping.version == "1"
+    assert mapping.version == "2"
     assert mapping.target_names == ARKIT_NAMES
     assert mapping.matrix.shape == (62, 52) and mapping.matrix.dtype == np.float32
     pose_rows = [channel_index(name) for name in POSE_CHANNELS]

@@ -23,7 +23,7 @@ def parse_heads(specs: list[str] | None) -> list[tuple[str, str]]:
 
     if not specs:
         heads = [("builtin", "default"), ("builtin", "b")]
-        return ([("ict", "a"), ("ict", "b")] + heads) if ict_installed() else heads
+        return [("ict", "a"), ("ict", "b"), *heads] if ict_installed() else heads
     out = []
     for spec in specs:
         for item in spec.split(","):
@@ -88,6 +88,12 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     rig = sub.add_parser("rig", help="every AU at A..E on each head: commanded vs detected, cross-talk")
     _add_common(rig, "mien-validate/rig")
     rig.add_argument("--aus", help="AU numbers, comma-separated (default: the 18 OpenFACS AUs)")
+    rig.add_argument(
+        "--human-data",
+        type=Path,
+        help="folder of real human media (video/, images/) to check which AUs the detector sees on people "
+        "(default: $MIEN_SHARED/data)",
+    )
     rig.set_defaults(handler=run_rig)
 
     emotions = sub.add_parser("emotions", help="the study's 6 emotions and 4 blends: recognition, confusion, quality")
@@ -116,9 +122,14 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     report = sub.add_parser("report", help="everything above in one self-contained HTML page")
     _add_common(report, "mien-validate")
     report.add_argument("--video", type=Path, help="human video for the comparison section (optional)")
+    report.add_argument("--human-data", type=Path, help="real human media folder for the rig section")
     report.add_argument("--expression", default="joy", help="expression the video shows (default %(default)s)")
     report.set_defaults(handler=run_report)
-    parser.set_defaults(handler=lambda args: parser.print_help() or 0)
+    def show_help(args: argparse.Namespace) -> int:
+        parser.print_help()
+        return 0
+
+    parser.set_defaults(handler=show_help)
 
 
 def _size(args: argparse.Namespace) -> tuple[int, int]:
@@ -194,7 +205,9 @@ def run_rig(args: argparse.Namespace) -> int:
     aus = _list(args.aus, "aus", int) if args.aus else list(OPENFACS_AUS)
     detector = _detector(args, emotions=False)
     try:
-        result = run_rig_fidelity(heads, aus, size=_size(args), detector=detector, progress=not args.quiet)
+        result = run_rig_fidelity(
+            heads, aus, size=_size(args), detector=detector, progress=not args.quiet, human_data=args.human_data
+        )
     finally:
         detector.close()
     written = result.write(args.out)

@@ -23,7 +23,8 @@ def contact_sheet(
 ) -> np.ndarray:
     """One (H, W, 3) uint8 image tiling ``images`` ((h, w, 3) uint8 each) row by row, ``labels`` under each.
 
-    ``columns`` defaults to a near-square grid (ceil(sqrt(n))). A label may have several lines (``"\n"``). Tiles of different sizes are centred in
+    ``columns`` defaults to a near-square grid (ceil(sqrt(n))). A label may have several lines
+    (``"\n"``). Tiles of different sizes are centred in
     cells as large as the largest image. ``padding`` pixels separate the cells; ``font_size`` is the label
     height in pixels (Pillow's default font).
 

@@ -4,7 +4,8 @@ The mapping (:class:`mien.rig.mapping.AUMapping`) says how much each AU channel 
 unit of intensity: ``weights = clip(aus @ M, 0, 1)``. Given detected scores ``b`` (52,), the AU estimate is
 the non-negative least-squares solution of ``aus @ M = b`` over a chosen set of AU channels (those of
 :data:`SOLVED_AUS`), capped at E (5). Left/right channels of one AU are solved separately and reported as
-their mean, so results come back as FACS intensities per AU, 0..5.
+their mean, so results come back as FACS intensities per AU, 0..5; where both sides drive the same targets
+alike (AU1's one ``browInnerUp``) they are one column, since no detector output can tell them apart.
 
 >>> import numpy as np
 >>> from mien.rig.mapping import AUMapping
@@ -25,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from mien.errors import InvalidValueError, MissingExtraError
-from mien.facs.catalogue import FACE_CHANNELS, OPENFACS_AUS, au_channels
+from mien.facs.catalogue import OPENFACS_AUS, au_channels
 from mien.rig.arkit import ARKIT_NAMES
 from mien.rig.mapping import INTENSITY_E, AUMapping
 
@@ -53,36 +54,54 @@ class AUSolver:
     def __init__(self, mapping: AUMapping | None = None, aus: Sequence[int] = SOLVED_AUS) -> None:
         self.mapping = (mapping or AUMapping.default()).reordered(ARKIT_NAMES, rig_name="the ARKit vocabulary")
         self.aus: tuple[int, ...] = tuple(int(a) for a in aus)
-        channels: list[int] = []
+        # One column per AU side, except where the two sides drive the same targets in the same proportions
+        # (AU1: one shared browInnerUp): the sides cannot be told apart there, so they are solved as one column
+        # (their sum) and the AU reads their common intensity.
+        design = self.mapping.matrix.T.astype(np.float64)  # (52, 62)
+        columns: list[np.ndarray] = []
         owner: list[int] = []
+        channels: list[int] = []
+        column_of: list[int] = []
         for k, code in enumerate(self.aus):
-            for channel in au_channels(code):
+            sides = [design[:, c] for c in au_channels(code)]
+            if not any(np.any(side) for side in sides):
+                raise InvalidValueError("aus", f"AU{code}", "AUs the mapping drives (each must move some blendshape)")
+            ids = au_channels(code)
+            shared = len(sides) == 2 and np.linalg.matrix_rank(np.stack(sides, axis=1), tol=1e-9) < 2
+            if shared:
+                sides = [sides[0] + sides[1]]
+            for n, channel in enumerate(ids):
                 channels.append(channel)
+                column_of.append(len(columns) + (0 if shared else n))
+            for side in sides:
+                columns.append(side)
                 owner.append(k)
         self.channels = np.asarray(channels, dtype=np.intp)
-        """Face-frame channel ids solved for (L and R separately)."""
+        """Face-frame channel ids the solve reports (both sides of lateral AUs)."""
+        self._column_of = np.asarray(column_of, dtype=np.intp)
         self._owner = np.asarray(owner, dtype=np.intp)
-        self._design = np.ascontiguousarray(self.mapping.matrix[self.channels].T, dtype=np.float64)  # (52, n_ch)
-        blind = [FACE_CHANNELS[c] for c in self.channels if not np.any(self._design[:, list(self.channels).index(c)])]
-        if blind:
-            raise InvalidValueError("aus", blind, "AUs the mapping drives (each must move some blendshape)")
+        self._design = np.ascontiguousarray(np.stack(columns, axis=1))  # (52, n_columns)
         counts = np.bincount(self._owner, minlength=len(self.aus)).astype(np.float64)
-        self._average = np.zeros((len(self.channels), len(self.aus)))
-        self._average[np.arange(len(self.channels)), self._owner] = 1.0 / counts[self._owner]
+        self._average = np.zeros((len(columns), len(self.aus)))
+        self._average[np.arange(len(columns)), self._owner] = 1.0 / counts[self._owner]
         self._nnls = _nnls()
 
-    def solve_channels(self, blendshapes: np.ndarray) -> np.ndarray:
-        """(..., len(channels)) AU channel intensities 0..5 for (..., 52) blendshape scores."""
+    def solve_columns(self, blendshapes: np.ndarray) -> np.ndarray:
+        """(..., n_columns) intensities 0..5 of the solved columns (an AU's sides, or its shared column)."""
         scores = np.asarray(blendshapes, dtype=np.float64)
         if scores.shape[-1:] != (len(ARKIT_NAMES),) or not np.all(np.isfinite(scores)):
             raise InvalidValueError("blendshapes", scores.shape, "(..., 52) finite ARKit scores")
         flat = scores.reshape(-1, len(ARKIT_NAMES))
-        out = np.empty((len(flat), len(self.channels)))
+        out = np.empty((len(flat), self._design.shape[1]))
         for i, row in enumerate(flat):
             out[i] = self._nnls(self._design, row)[0]
         np.clip(out, 0.0, INTENSITY_E, out=out)
-        return out.reshape(*scores.shape[:-1], len(self.channels))
+        return out.reshape(*scores.shape[:-1], self._design.shape[1])
+
+    def solve_channels(self, blendshapes: np.ndarray) -> np.ndarray:
+        """(..., len(channels)) AU channel intensities 0..5 (a shared column gives both sides its value)."""
+        return np.asarray(self.solve_columns(blendshapes)[..., self._column_of])
 
     def solve(self, blendshapes: np.ndarray) -> np.ndarray:
         """(..., len(aus)) AU intensities 0..5 (left/right averaged) for (..., 52) blendshape scores."""
-        return np.asarray(self.solve_channels(blendshapes) @ self._average)
+        return np.asarray(self.solve_columns(blendshapes) @ self._average)

@@ -52,7 +52,7 @@ def face_box(landmarks: np.ndarray, scale: float = CROP_SCALE) -> tuple[int, int
         inner = points[17:]
         centre[0] = (inner[:, 0].min() + inner[:, 0].max()) / 2.0
     half = max(float((hi - lo).max()) * scale / 2.0, 4.0)
-    return int(round(centre[0] - half)), int(round(centre[1] - half)), int(round(2 * half))
+    return round(centre[0] - half), round(centre[1] - half), round(2 * half)
 
 
 def crop_square(image: np.ndarray, box: tuple[int, int, int]) -> np.ndarray:
@@ -97,15 +97,14 @@ class EmotionClassifier:
             self._interpreter: Any = Interpreter(model_path=str(self.model_path), num_threads=1)
             self._interpreter.allocate_tensors()
         except (RuntimeError, ValueError) as exc:
-            raise InvalidValueError("emotion model", str(self.model_path), f"a TFLite emotion classifier ({exc})") from None
+            expected = f"a TFLite emotion classifier ({exc})"
+            raise InvalidValueError("emotion model", str(self.model_path), expected) from None
         inputs = self._interpreter.get_input_details()[0]
         outputs = self._interpreter.get_output_details()[0]
-        if tuple(inputs["shape"]) != (1, INPUT_SIZE, INPUT_SIZE, 1) or tuple(outputs["shape"]) != (1, len(EMOTION_LABELS)):
-            raise InvalidValueError(
-                "emotion model",
-                str(self.model_path),
-                f"input (1, 64, 64, 1) and output (1, 7); this one has {tuple(inputs['shape'])} -> {tuple(outputs['shape'])}",
-            )
+        shapes = tuple(inputs["shape"]), tuple(outputs["shape"])
+        if shapes != ((1, INPUT_SIZE, INPUT_SIZE, 1), (1, len(EMOTION_LABELS))):
+            expected = f"input (1, 64, 64, 1) and output (1, 7); this one has {shapes[0]} -> {shapes[1]}"
+            raise InvalidValueError("emotion model", str(self.model_path), expected)
         self._input = int(inputs["index"])
         self._output = int(outputs["index"])
 

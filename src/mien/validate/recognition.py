@@ -239,8 +239,7 @@ class RecognitionResult:
 
     def rate(self, **conditions: Any) -> float:
         """Share of matching stimuli recognised (nan when none match)."""
-        judged = [s.correct() for s in self.subset(**conditions)]
-        judged = [j for j in judged if j is not None]
+        judged = [float(j) for j in (s.correct() for s in self.subset(**conditions)) if j is not None]
         return float(np.mean(judged)) if judged else float("nan")
 
     def quality(self, expression: str, **conditions: Any) -> float:

@@ -17,6 +17,7 @@ import html
 import importlib.metadata
 import platform
 import time
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -37,7 +38,7 @@ def _sha256(path: str | Path | None) -> str:
     return digest.hexdigest()
 
 
-def environment(models: dict[str, str | None]) -> dict[str, Any]:
+def environment(models: Mapping[str, str | None]) -> dict[str, Any]:
     """Versions of mien, its tables, the libraries, and the models (path, bytes, SHA-256)."""
     from mien import __version__
     from mien.facs.prototypes import PROTOTYPES_VERSION
@@ -118,7 +119,8 @@ def _emotions_section(result: Any, folder: Path) -> str:
         "Quality = the mean probability of the target label (Broekens' metric target / (mean over labels x "
         "labels) with probabilities that sum to 1); the people's values are the study's, over ten labels.</p>",
         "<ul>",
-        f"<li>joy, sadness, anger, surprise, fear, frontal (target 90%): <b>{_pct(result.rate(expression=basics, view=frontal))}</b></li>",
+        "<li>joy, sadness, anger, surprise, fear, frontal (target 90%): "
+        f"<b>{_pct(result.rate(expression=basics, view=frontal))}</b></li>",
         f"<li>the same at 45 degrees (target 75%): <b>{_pct(result.rate(expression=basics, view=oblique))}</b></li>",
         f"<li>the same in the 90-degree profile (crop from the rig's projected landmarks): "
         f"<b>{_pct(result.rate(expression=basics, view=lateral))}</b></li>",
@@ -236,7 +238,10 @@ def build_report(args: argparse.Namespace, heads: list[tuple[str, str]]) -> Path
     started = time.perf_counter()
     detector = _detector(args, emotions=False)
     try:
-        rig = run_rig_fidelity(heads, list(OPENFACS_AUS), size=_size(args), detector=detector, progress=not args.quiet)
+        rig = run_rig_fidelity(
+            heads, list(OPENFACS_AUS), size=_size(args), detector=detector, progress=not args.quiet,
+            human_data=getattr(args, "human_data", None),
+        )  # fmt: skip
     finally:
         detector.close()
     rig.write(out / "rig")
