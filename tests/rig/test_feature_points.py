@@ -82,16 +82,30 @@ def test_compiled_targets_are_unit_moves(head: tuple[Rig, FeaturePointRig]) -> N
     assert np.all(dense[:, [0, 2]] == 0.0)
 
 
+def limited(spec_index: int, axis: int) -> bool:
+    """Whether the rig strain-limits feature ``spec_index``'s rig-axis ``axis`` (a move toward a barrier; the
+    targets are linear, so the move away from it is limited alike)."""
+    spec = feature_specs()[spec_index]
+    return (bool(spec.toward) and "xyz".index(spec.toward[1]) == axis) or (spec.medial and axis == 0)
+
+
 def test_anchor_moves_exactly_by_the_vector(head: tuple[Rig, FeaturePointRig]) -> None:
+    """Free moves are exact (twice the intensity, twice the move); moves toward a barrier go the same way, less far."""
     rig, fp = head
-    for emotion in ("happy", "surprise", "angry", "disgust"):
+    for emotion in ("happy", "surprise", "angry", "disgust", "sad", "fear"):
         vectors = table1(emotion)
-        for f, name in enumerate(FEATURE_NAMES):  # each feature alone moves its anchor by exactly its vector
+        for f, name in enumerate(FEATURE_NAMES):  # each feature alone moves its anchor by its vector
             alone = np.zeros_like(vectors)
             alone[f] = vectors[f]
             d = deform(rig, table1_weights(alone, 1.2))
             z, x, y = vectors[f]
-            np.testing.assert_allclose(d[fp.anchors[f]], 1.2 * np.array([x, -y, z]), atol=1e-6, err_msg=name)
+            want = 1.2 * np.array([x, -y, z])
+            got = d[fp.anchors[f]]
+            for a in range(3):
+                if limited(f, a) and want[a] != 0:
+                    assert 0.05 * abs(want[a]) < got[a] * np.sign(want[a]) <= abs(want[a]) + 1e-6, (emotion, name, a)
+                else:
+                    np.testing.assert_allclose(got[a], want[a], atol=1e-6, err_msg=f"{emotion} {name} {a}")
         d = deform(rig, table1_weights(vectors, 1.2))  # overlapping regions add up, as in the paper
         np.testing.assert_allclose(fp.displacement(vectors, 1.2, rig.n_vertices), d, atol=1e-6)
 
@@ -107,8 +121,8 @@ def test_happy_lifts_both_corners_outward(head: tuple[Rig, FeaturePointRig]) -> 
 def test_surprise_raises_brows_and_drops_jaw(head: tuple[Rig, FeaturePointRig]) -> None:
     rig, _ = head
     d = deform(rig, table1_weights(table1("surprise"), 1.0))
-    for brow in (17, 21, 22, 26):
-        assert d[rig.landmarks[brow], 1] > 0.003
+    for brow in (17, 21, 22, 26):  # strain-limited over the lids: less than the 5 mm of Table 1
+        assert d[rig.landmarks[brow], 1] > 0.002
     assert d[rig.landmarks[8], 1] < -0.009
     assert d[rig.landmarks[57], 1] < -0.005  # the lower lip goes with the jaw: the mouth opens
     assert abs(d[rig.landmarks[51], 1]) < 0.0025
@@ -117,8 +131,9 @@ def test_surprise_raises_brows_and_drops_jaw(head: tuple[Rig, FeaturePointRig]) 
 def test_angry_pulls_inner_brows_together_and_down(head: tuple[Rig, FeaturePointRig]) -> None:
     rig, _ = head
     d = deform(rig, table1_weights(table1("angry"), 1.0))
-    assert d[rig.landmarks[22], 0] < -0.005 < 0.005 < d[rig.landmarks[21], 0]
-    assert d[rig.landmarks[22], 1] < -0.005
+    # strain-limited toward the midline and the lids: at most half the neutral gap closes at intensity 2.4
+    assert d[rig.landmarks[22], 0] < -0.002 < 0.002 < d[rig.landmarks[21], 0]
+    assert d[rig.landmarks[22], 1] < -0.002
 
 
 def test_regions_respect_mouth_and_lids(head: tuple[Rig, FeaturePointRig]) -> None:
@@ -143,7 +158,9 @@ def test_radii_override_and_bad_input() -> None:
     small = FeaturePointRig.build(rig, radii={"CheekLeft": 0.01})
     big = FeaturePointRig.build(rig)
     i = FEATURE_NAMES.index("CheekLeft")
-    assert len(small.region_ids[i]) < len(big.region_ids[i]) and small.radii_m[i] == 0.01
+    from mien.rig.feature_points import GROWTH_LIMIT
+
+    assert len(small.region_ids[i]) < len(big.region_ids[i]) and 0.01 <= small.radii_m[i] <= GROWTH_LIMIT * 0.01
     with pytest.raises(UnknownNameError, match="Ear"):
         FeaturePointRig.build(rig, radii={"Ear": 0.01})
     with pytest.raises(InvalidValueError, match="radii"):
@@ -251,12 +268,15 @@ def test_edge_strain_within_the_heads_own_shapes(study_head: list[Rig]) -> None:
 
 @pytest.mark.xfail(strict=True, reason="open: Table 1 at 2.4 still turns skin triangles over (see report)")
 def test_no_triangle_flips(study_head: list[Rig]) -> None:
-    from mien.rig.mesh_quality import flipped_triangles
+    """No skin triangle turns over, the slivers the head's own jawOpen/mouthClose/eyeBlink fold excepted."""
+    from mien.rig.mesh_quality import flipped_triangles, fragile_faces, region_faces
 
     for rig in study_head:
         fp = FeaturePointRig.build(rig)
+        judged = np.setdiff1d(region_faces(rig), fragile_faces(rig))
         for name in EXPRESSIONS:
-            assert flipped_triangles(rig, expression_vertices(rig, fp, name, 2.4)).size == 0, (rig.name, name)
+            flips = flipped_triangles(rig, expression_vertices(rig, fp, name, 2.4), faces=judged)
+            assert flips.size == 0, (rig.name, name)
 
 
 def test_mesh_quality_measures() -> None:

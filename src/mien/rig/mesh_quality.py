@@ -24,6 +24,7 @@ from mien.rig.model import Rig
 __all__ = [
     "edge_strain",
     "flipped_triangles",
+    "fragile_faces",
     "max_edge_strain",
     "max_target_strain",
     "region_edges",
@@ -119,3 +120,18 @@ def max_target_strain(rig: Rig, names: tuple[str, ...] | None = None, region: st
     neutral = np.asarray(rig.neutral, dtype=np.float64)
     scores = [(n, max_edge_strain(rig, neutral + rig.target(n).dense(rig.n_vertices), region)) for n in names]
     return max(scores, key=lambda item: item[1])
+
+
+FRAGILE_TARGETS = ("jawOpen", "mouthClose", "eyeBlinkLeft", "eyeBlinkRight")
+"""ARKit shapes whose own flips mark a head's fragile slivers (mouth corners, lid margins)."""
+
+
+def fragile_faces(rig: Rig, names: tuple[str, ...] = FRAGILE_TARGETS, region: str | None = "skin") -> np.ndarray:
+    """(k,) int64 ids of the triangles of ``region`` that the head's own ``names`` targets (at weight 1) turn over.
+
+    These are slivers where the mouth opens or the lids close: the artist-made shapes fold them too, so a
+    deformation is judged on the other triangles (:func:`flipped_triangles` with ``faces=``).
+    """
+    neutral = np.asarray(rig.neutral, dtype=np.float64)
+    ids = [flipped_triangles(rig, neutral + rig.target(n).dense(rig.n_vertices), region) for n in names if n in rig.target_names]
+    return np.unique(np.concatenate(ids)) if ids else np.zeros(0, np.int64)
