@@ -34,8 +34,8 @@ def _load() -> dict[str, dict[str, float]]:
         for token in row["aus"].split():
             name, _, value = token.partition(":")
             spec = parse_au(name if value else token)
-            entry[f"AU{spec.code}"] = check_intensity(float(value), f"{token} ({row['emotion']})") if value else float(
-                spec.intensity or 0.0
+            entry[f"AU{spec.code}"] = (
+                check_intensity(float(value), f"{token} ({row['emotion']})") if value else float(spec.intensity or 0.0)
             )
         table[row["emotion"]] = entry
     return table

@@ -536,12 +536,12 @@ def build_head_mesh(shape: HeadShape) -> HeadMesh:
     # incisal edges just below the lip line, lower incisors behind them (overjet) with their edges a little
     # higher than the upper edges (overbite), so parted lips show the upper row and an open jaw both rows.
     z_arch = z_lips - TEETH_DEPTH_M
-    for part, teeth, y_edge, z_front, half_w in (
-        (TEETH_UPPER, _UPPER_TEETH, ym - TEETH_SHOW_M, z_arch, mw * 1.02),
-        (TEETH_LOWER, _LOWER_TEETH, ym - TEETH_SHOW_M + 0.0016, z_arch - 0.0034, mw * 0.96),
+    for part, teeth, y_edge, row_z, row_half_w in (
+        (TEETH_UPPER, _UPPER_TEETH, float(ym - TEETH_SHOW_M), float(z_arch), float(mw * 1.02)),
+        (TEETH_LOWER, _LOWER_TEETH, float(ym - TEETH_SHOW_M + 0.0016), float(z_arch - 0.0034), float(mw * 0.96)),
     ):
         upper = part == TEETH_UPPER
-        pts, tri, col = _dental_row(teeth, z_front, half_w, y_edge, upper)
+        pts, tri, col = _dental_row(teeth, row_z, row_half_w, y_edge, upper)
         b.add(pts, tri, col, part, pts[:, :2])
 
     # Tongue: a flattened ellipsoid lying on the floor of the mouth.
