@@ -119,7 +119,7 @@ def vertex_normals(vertices: np.ndarray, faces: np.ndarray, out: np.ndarray | No
     face gets +z. ``out`` (n, 3) float32 is filled in place when given.
 
     >>> square = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], np.float32)
-    >>> vertex_normals(square, np.array([[0, 1, 2], [0, 2, 3]], np.int32))[0].tolist()
+    >>> [round(v, 6) for v in vertex_normals(square, np.array([[0, 1, 2], [0, 2, 3]], np.int32))[0].tolist()]
     [0.0, 0.0, 1.0]
     """
     vertices = np.ascontiguousarray(vertices, dtype=np.float32)
