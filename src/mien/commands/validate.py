@@ -125,6 +125,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     report.add_argument("--human-data", type=Path, help="real human media folder for the rig section")
     report.add_argument("--expression", default="joy", help="expression the video shows (default %(default)s)")
     report.set_defaults(handler=run_report)
+
     def show_help(args: argparse.Namespace) -> int:
         parser.print_help()
         return 0
@@ -211,17 +212,9 @@ def run_rig(args: argparse.Namespace) -> int:
     finally:
         detector.close()
     written = result.write(args.out)
-    print(result.summary() if hasattr(result, "summary") else f"rig fidelity of {len(heads)} head(s)")
-    print(f"wrote {args.out}: {', '.join(sorted(Path(str(p)).name for p in _paths(written)))}")
+    print(result.summary())
+    print(f"wrote {args.out}: {', '.join(sorted(path.name for path in written.values()))}")
     return 0
-
-
-def _paths(written: Any) -> list[Any]:
-    if isinstance(written, dict):
-        return list(written.values())
-    if isinstance(written, list | tuple):
-        return list(written)
-    return [written]
 
 
 def run_compare_command(args: argparse.Namespace) -> int:
@@ -247,7 +240,7 @@ def run_compare_command(args: argparse.Namespace) -> int:
     print(f"closed loop (human -> character -> detector): r = {result.closed_loop.r:.2f}")
     if result.expression is not None:
         print(f"{args.expression}: human vs character activation maps r = {result.expression.r:.2f}")
-    print(f"wrote {args.out}: {', '.join(sorted(Path(str(p)).name for p in _paths(written)))}")
+    print(f"wrote {args.out}: {', '.join(sorted(path.name for path in written.values()))}")
     return 0
 
 

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mien.rig.model import Rig
+from mien.rig.polygon import inside_polygon
 
 __all__ = [
     "BROW_ALBEDO",
@@ -203,17 +204,6 @@ def _paint_band(
     canvas.over(region, alpha, albedo)
 
 
-def _inside_polygon(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
-    """(k,) bool: which (k, 2) points lie inside the closed (m, 2) polygon (even-odd rule)."""
-    x, y = points[:, 0:1], points[:, 1:2]
-    x0, y0 = polygon[:, 0], polygon[:, 1]
-    x1, y1 = np.roll(x0, -1), np.roll(y0, -1)
-    crosses = (y0 > y) != (y1 > y)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        x_at = x0 + (y - y0) * (x1 - x0) / (y1 - y0)
-    return np.asarray(((crosses & (x < x_at)).sum(axis=1) % 2) == 1)
-
-
 def _brow_hairs(curve: np.ndarray, rng: np.random.Generator) -> Detail:
     """A detail function: opacity 0.8..1 from short hair strokes slanting up and outward at the inner end and
     lying along the brow toward the tail."""
@@ -268,7 +258,7 @@ def _paint(rig: Rig, seed: int) -> FacePaint | None:
 
     region, texels = canvas.window(lips.min(axis=0) - 0.004, lips.max(axis=0) + 0.004)
     distance = np.min(np.linalg.norm(texels[:, None] - lips[None], axis=2), axis=1)
-    signed = np.where(_inside_polygon(texels, lips), distance, -distance)
+    signed = np.where(inside_polygon(texels, lips), distance, -distance)
     canvas.over(region, _smoothstep(-LIP_EDGE_M, LIP_EDGE_M, signed), LIP_ALBEDO)
 
     for lid in upper_lids:

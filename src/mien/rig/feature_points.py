@@ -41,6 +41,7 @@ weights ``(x s, -y s, z s)``: see :func:`table1_weights`.
 from __future__ import annotations
 
 import csv
+import itertools
 from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cache
@@ -161,7 +162,7 @@ def design_moves() -> np.ndarray:
 def _chain(graph: EdgeGraph, landmarks: np.ndarray, chain: tuple[int, ...]) -> np.ndarray:
     """Vertex ids along a chain of landmarks joined by shortest edge paths (a lid margin stays on its lid)."""
     ids = [landmarks[list(chain)]]
-    for a, b in zip(chain[:-1], chain[1:], strict=True):
+    for a, b in itertools.pairwise(chain):
         ids.append(graph.path(int(landmarks[a]), int(landmarks[b])))
     return np.unique(np.concatenate(ids))
 

@@ -45,6 +45,7 @@ from mien.progress import progress
 from mien.rig.arkit import ARKIT_NAMES
 from mien.rig.model import MorphTarget, Rig
 from mien.rig.obj import read_obj, read_obj_vertices
+from mien.rig.polygon import inside_polygon
 
 __all__ = [
     "ICT_EXTRA_TARGETS",
@@ -269,17 +270,6 @@ def _sphere_center(points: np.ndarray) -> np.ndarray:
     return np.asarray(solution[:3])
 
 
-def _inside_polygon(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
-    """(k,) bool: which (k, 2) points lie inside the closed (m, 2) polygon (even-odd rule)."""
-    x, y = points[:, 0:1], points[:, 1:2]
-    x0, y0 = polygon[:, 0], polygon[:, 1]
-    x1, y1 = np.roll(x0, -1), np.roll(y0, -1)
-    crosses = (y0 > y) != (y1 > y)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        x_at = x0 + (y - y0) * (x1 - x0) / (y1 - y0)
-    return np.asarray(((crosses & (x < x_at)).sum(axis=1) % 2) == 1)
-
-
 def _regions(neutral: np.ndarray, landmarks: np.ndarray) -> dict[str, np.ndarray]:
     regions = {name: np.arange(lo, hi + 1, dtype=np.int32) for name, (lo, hi) in ICT_PARTS.items()}
     n = len(neutral)
@@ -288,7 +278,7 @@ def _regions(neutral: np.ndarray, landmarks: np.ndarray) -> dict[str, np.ndarray
     # Lips: face vertices inside the outer lip contour (iBUG 48..59) seen from the front, on the lips' surface.
     face = regions["face"]
     lip_points = neutral[landmarks[48:60]]
-    inside = _inside_polygon(neutral[face, :2], lip_points[:, :2])
+    inside = inside_polygon(neutral[face, :2], lip_points[:, :2])
     in_front = neutral[face, 2] > lip_points[:, 2].min() - 0.005
     regions["lips"] = face[inside & in_front].astype(np.int32)
     return regions

@@ -133,5 +133,9 @@ def fragile_faces(rig: Rig, names: tuple[str, ...] = FRAGILE_TARGETS, region: st
     deformation is judged on the other triangles (:func:`flipped_triangles` with ``faces=``).
     """
     neutral = np.asarray(rig.neutral, dtype=np.float64)
-    ids = [flipped_triangles(rig, neutral + rig.target(n).dense(rig.n_vertices), region) for n in names if n in rig.target_names]
+    ids = [
+        flipped_triangles(rig, neutral + rig.target(n).dense(rig.n_vertices), region)
+        for n in names
+        if n in rig.target_names
+    ]
     return np.unique(np.concatenate(ids)) if ids else np.zeros(0, np.int64)
