@@ -65,7 +65,33 @@ class EdgeGraph:
         return np.asarray(out, dtype=np.float64)
 
     def _distances_heap(self, src: np.ndarray, limit_m: float) -> np.ndarray:
+        return self._dijkstra(src, limit_m)[0]
+
+    def path(self, start: int, end: int) -> np.ndarray:
+        """(k,) int64 vertex ids of a shortest edge path from ``start`` to ``end`` (both included).
+
+        A path never jumps a gap in the mesh (the mouth slit, an eye opening), so a chain of landmarks along a
+        lid or lip gives that lid's or lip's vertices.
+        """
+        try:
+            from scipy.sparse import csr_matrix
+            from scipy.sparse.csgraph import dijkstra
+        except ImportError:
+            dist, previous = self._dijkstra(np.asarray([int(start)]), np.inf)
+        else:
+            graph = csr_matrix((self.lengths, self.indices, self.indptr), shape=(self.n_vertices, self.n_vertices))
+            dist, previous = dijkstra(graph, directed=True, indices=int(start), return_predecessors=True)
+        if not np.isfinite(dist[end]):
+            raise InvalidValueError("end", end, f"a vertex joined by edges to vertex {start}")
+        out = [int(end)]
+        while out[-1] != start:
+            out.append(int(previous[out[-1]]))
+        return np.asarray(out[::-1], dtype=np.int64)
+
+    def _dijkstra(self, src: np.ndarray, limit_m: float) -> tuple[np.ndarray, np.ndarray]:
+        """Pure-Python Dijkstra (no scipy): (distances, predecessor of each vertex or -1), up to ``limit_m``."""
         dist = np.full(self.n_vertices, np.inf)
+        previous = np.full(self.n_vertices, -1, dtype=np.int64)
         dist[src] = 0.0
         heap = [(0.0, int(s)) for s in src]
         heapq.heapify(heap)
@@ -78,45 +104,6 @@ class EdgeGraph:
                 nd = d + lengths[k]
                 u = indices[k]
                 if nd < dist[u] and nd <= limit_m:
-                    dist[u] = nd
-                    heapq.heappush(heap, (nd, int(u)))
-        return dist
-
-    def path(self, start: int, end: int) -> np.ndarray:
-        """(k,) int64 vertex ids of a shortest edge path from ``start`` to ``end`` (both included).
-
-        A path never jumps a gap in the mesh (the mouth slit, an eye opening), so a chain of landmarks along a
-        lid or lip gives that lid's or lip's vertices.
-        """
-        try:
-            from scipy.sparse import csr_matrix
-            from scipy.sparse.csgraph import dijkstra
-        except ImportError:
-            dist, previous = self._tree(int(start))
-        else:
-            graph = csr_matrix((self.lengths, self.indices, self.indptr), shape=(self.n_vertices, self.n_vertices))
-            dist, previous = dijkstra(graph, directed=True, indices=int(start), return_predecessors=True)
-        if not np.isfinite(dist[end]):
-            raise InvalidValueError("end", end, f"a vertex joined by edges to vertex {start}")
-        out = [int(end)]
-        while out[-1] != start:
-            out.append(int(previous[out[-1]]))
-        return np.asarray(out[::-1], dtype=np.int64)
-
-    def _tree(self, start: int) -> tuple[np.ndarray, np.ndarray]:
-        dist = np.full(self.n_vertices, np.inf)
-        previous = np.full(self.n_vertices, -1, dtype=np.int64)
-        dist[start] = 0.0
-        heap = [(0.0, start)]
-        indptr, indices, lengths = self.indptr, self.indices, self.lengths
-        while heap:
-            d, v = heapq.heappop(heap)
-            if d > dist[v]:
-                continue
-            for k in range(indptr[v], indptr[v + 1]):
-                nd = d + lengths[k]
-                u = indices[k]
-                if nd < dist[u]:
                     dist[u] = nd
                     previous[u] = v
                     heapq.heappush(heap, (nd, int(u)))

@@ -349,7 +349,7 @@ def run_recognition(
                     frame, features = peak_face(stimulus.expression, stimulus.intensity, basis)
                     weights = renderer.weights(frame, features)
                     rgb, hint = renderer.render_weights(weights)
-                    deformed = renderer._deformer.deform(weights)
+                    deformed = renderer.last_vertices
                     nose_lip = float(np.linalg.norm(deformed[rig.landmarks[33]] - deformed[rig.landmarks[51]])) * 1e3
                     timings["render"] += time.perf_counter() - started
                     started = time.perf_counter()

@@ -45,6 +45,8 @@ class StimulusRenderer:
         self._renderer = make_renderer(rig, camera, self.size, samples=samples)
         self._deformer = Deformer(rig)
         self._vertices = np.empty((rig.n_vertices, 3), np.float32)
+        self.last_vertices = self._vertices
+        """(n_vertices, 3) float32 deformed mesh of the last render, before head pose (reused by the next)."""
 
     def __enter__(self) -> StimulusRenderer:
         return self
