@@ -15,5 +15,10 @@ COMMAND_MODULES: tuple[str, ...] = (
     "learn",
     "laugh",
     "validate",
+    "export",
+    "import_",
+    "serve",
+    "send",
+    "study",
 )
 """Subcommand modules under :mod:`mien.commands`, in ``mien --help`` order."""
