@@ -47,7 +47,7 @@ def test_au_speed_mode_and_json(tmp_path):
         (["emote", "glee"], "unknown emotion 'glee'"),
         (["emote", "joy", "--intensity", "7"], "intensity=7.0"),
         (["emote", "joy", "--intensity", "nan"], "intensity=nan"),
-        (["emote", "joy", "--hold", "-1"], "hold_s=-1.0"),
+        (["emote", "joy", "--hold", "-1"], "argument --hold: seconds '-1' must be >= 0"),
         (["au", "AU99"], "unknown action unit 'AU99'"),
         (["au", "AU12X"], "AU12X"),
         (["render", "joy", "--size", "0x10"], "size"),

@@ -7,17 +7,34 @@ import importlib
 import os
 import sys
 from collections.abc import Sequence
+from typing import NoReturn
 
 from mien import __version__
 from mien.commands import COMMAND_MODULES
 from mien.errors import MienError
 
-__all__ = ["build_parser", "main"]
+__all__ = ["UsageError", "build_parser", "main"]
+
+
+class UsageError(Exception):
+    """An argparse usage error, raised instead of printing usage and exiting (see :class:`_Parser`)."""
+
+    def __init__(self, prog: str, message: str) -> None:
+        self.prog = prog
+        super().__init__(message)
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with the CLI contract's error form: one line ``PROG: error: MESSAGE (see PROG --help)``,
+    exit 2, for usage errors as for every other user mistake. Subparsers inherit the class."""
+
+    def error(self, message: str) -> NoReturn:
+        raise UsageError(self.prog, message)
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The full argument parser, with every subcommand registered."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="mien",
         description="Make virtual characters' faces express emotion (FACS, emotions, laughter).",
     )
@@ -34,23 +51,43 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _one_line(message: object) -> str:
+    """The contract's one-line message (a multi-line error joined with '; ')."""
+    return "; ".join(line.strip() for line in str(message).splitlines() if line.strip())
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run ``mien`` with ``argv`` (default: ``sys.argv[1:]``) and return the exit code."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except UsageError as exc:
+        print(f"{exc.prog}: error: {_one_line(exc)} (see {exc.prog} --help)", file=sys.stderr)
+        return 2
     if getattr(args, "handler", None) is None:
         parser.print_help()
         return 0
     try:
         return int(args.handler(args) or 0)
     except MienError as exc:
-        print(f"mien {args.command}: error: {exc}", file=sys.stderr)
+        print(f"mien {args.command}: error: {_one_line(exc)}", file=sys.stderr)
         return 2
     except BrokenPipeError:
         # The reader went away (`mien ... | head -1`); files already written stay. Silence the final flush.
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
-        print(f"mien {args.command}: output pipe closed; files already written are kept", file=sys.stderr)
+        print(f"mien {args.command}: error: output pipe closed; files already written are kept", file=sys.stderr)
+        return 2
+    except MemoryError:
+        print(
+            f"mien {args.command}: error: out of memory; ask for less (shorter, lower fps, smaller size)",
+            file=sys.stderr,
+        )
+        return 2
+    except OSError as exc:
+        # A file system refusal met while writing (disk full, a path that vanished): name the path.
+        where = f": {exc.filename}" if exc.filename else ""
+        print(f"mien {args.command}: error: {exc.strerror or exc}{where}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)

@@ -5,8 +5,9 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
-from pathlib import Path
 from typing import TYPE_CHECKING
+
+from mien.commands._checks import output_file, positive_fps, positive_seconds
 
 if TYPE_CHECKING:
     from mien.facs.clip import Clip
@@ -16,14 +17,19 @@ __all__ = ["add_curve_options", "emit_curves"]
 
 def add_curve_options(parser: argparse.ArgumentParser, duration_s: float = 2.0) -> None:
     """Add ``--duration --fps --seed --no-idle -o --plot`` to ``parser``."""
-    parser.add_argument("--duration", type=float, default=duration_s, help="seconds to generate (default %(default)s)")
-    parser.add_argument("--fps", type=float, default=60.0, help="frames per second (default %(default)s)")
+    parser.add_argument(
+        "--duration", type=positive_seconds, default=duration_s, help="seconds to generate (default %(default)s)"
+    )
+    parser.add_argument("--fps", type=positive_fps, default=60.0, help="frames per second (default %(default)s)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the idle behaviour (default %(default)s)")
     parser.add_argument("--no-idle", action="store_true", help="switch blinks, micro-motion, gaze and wobble off")
     parser.add_argument(
-        "-o", "--output", type=Path, help="save the curves: .csv, .json, .npz (default: print active channels as CSV)"
+        "-o",
+        "--output",
+        type=output_file,
+        help="save the curves: .csv, .json, .npz (default: print active channels as CSV); missing folders are made",
     )
-    parser.add_argument("--plot", type=Path, metavar="PNG", help="also save a plot of the curves")
+    parser.add_argument("--plot", type=output_file, metavar="PNG", help="also save a plot of the curves")
 
 
 def emit_curves(clip: Clip, args: argparse.Namespace, title: str, events: Sequence[tuple[float, str]] = ()) -> None:

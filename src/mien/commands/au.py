@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from mien.commands._checks import check_curve_request, non_negative_seconds, positive_seconds
 from mien.commands._curves import add_curve_options, emit_curves
 
 
@@ -16,16 +17,18 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("aus", nargs="+", metavar="AU", help="action units with optional side and A..E letter")
     dynamics = parser.add_mutually_exclusive_group()
-    dynamics.add_argument("--tau", type=float, help="time constant in seconds for the held AUs")
+    dynamics.add_argument("--tau", type=positive_seconds, help="time constant in seconds for the held AUs")
     dynamics.add_argument("--speed", type=float, help="OpenFACS Speed 0..1 per tick at 60 Hz")
     parser.add_argument(
         "--play",
         nargs=3,
-        type=float,
+        type=non_negative_seconds,
         metavar=("ONSET", "APEX", "OFFSET"),
         help="play the AUs once with these onset/apex/offset seconds instead of holding them",
     )
-    parser.add_argument("--start", type=float, default=0.2, help="when the AUs start, seconds (default %(default)s)")
+    parser.add_argument(
+        "--start", type=non_negative_seconds, default=0.2, help="when the AUs start, seconds (default %(default)s)"
+    )
     add_curve_options(parser)
     parser.set_defaults(handler=run)
 
@@ -34,7 +37,10 @@ def run(args: argparse.Namespace) -> int:
     from mien.character import Character
     from mien.facs.intensity import parse_au
 
+    from mien.facs.catalogue import FACE_CHANNELS
+
     specs = [parse_au(text) for text in args.aus]  # all validated before anything runs
+    check_curve_request(args.duration, args.fps, len(FACE_CHANNELS))
     character = Character(seed=args.seed, idle=not args.no_idle)
     fps = args.fps
     n_before = max(0, round(args.start * fps))

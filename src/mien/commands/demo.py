@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from mien.commands._checks import check_curve_request, output_folder, positive_fps
 from mien.commands._scene import add_scene_options, scene_from_args
 
 if TYPE_CHECKING:
@@ -21,6 +22,10 @@ SEGMENT_S = 2.0
 """Seconds per expression in the demo video."""
 
 
+_RIG_VALUES_PER_FRAME = 128
+"""Upper bound of the morph-target weights and pose values held per frame (ICT-FaceKit: 57 + 6)."""
+
+
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "demo",
@@ -30,12 +35,16 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "rendered on the default head (ICT-FaceKit if installed, else the built-in head).",
     )
     parser.add_argument(
-        "-o", "--out", type=Path, default=Path("mien-output"), help="output folder (default %(default)s)"
+        "-o",
+        "--out",
+        type=output_folder,
+        default=Path("mien-output"),
+        help="output folder, made if missing (default %(default)s)",
     )
     parser.add_argument(
         "--intensity", type=float, default=1.2, help="emotion intensity, 1.2 as in the study (default %(default)s)"
     )
-    parser.add_argument("--fps", type=float, default=30.0, help="frames per second (default %(default)s)")
+    parser.add_argument("--fps", type=positive_fps, default=30.0, help="frames per second (default %(default)s)")
     parser.add_argument("--seed", type=int, default=0, help="idle-behaviour seed")
     parser.add_argument("--no-video", action="store_true", help="only the curves, plot and contact sheet")
     add_scene_options(parser)
@@ -70,7 +79,11 @@ def run(args: argparse.Namespace) -> int:
     from mien.render.contact_sheet import contact_sheet
     from mien.render.video import Mp4Writer, write_png
 
+    from mien.facs.catalogue import FACE_CHANNELS
+
     out: Path = args.out
+    # curves, plus per-frame rig weights and poses (frames themselves are streamed, one at a time)
+    check_curve_request(SEGMENT_S * len(DEMO_SEQUENCE), args.fps, len(FACE_CHANNELS) + _RIG_VALUES_PER_FRAME)
     out.mkdir(parents=True, exist_ok=True)
     basis = "feature_points" if args.basis == "feature-points" else "facs"
     clip, features, peaks = demo_clip(args.intensity, args.fps, args.seed, basis)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from mien.commands._checks import check_curve_request, non_negative_seconds
 from mien.commands._curves import add_curve_options, emit_curves
 
 
@@ -16,10 +17,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("emotion", help="emotion or blend name (aliases such as happy, sad, angry work)")
     parser.add_argument("--intensity", type=float, default=1.0, help="0..5; 1 = the prototype (study: 1.2, 2.4)")
-    parser.add_argument("--onset", type=float, default=0.4, help="onset seconds (default %(default)s)")
-    parser.add_argument("--hold", type=float, default=0.3, help="hold seconds (default %(default)s)")
-    parser.add_argument("--decay", type=float, default=0.3, help="decay seconds (default %(default)s)")
-    parser.add_argument("--start", type=float, default=0.2, help="event time in seconds (default %(default)s)")
+    parser.add_argument("--onset", type=non_negative_seconds, default=0.4, help="onset seconds (default %(default)s)")
+    parser.add_argument("--hold", type=non_negative_seconds, default=0.3, help="hold seconds (default %(default)s)")
+    parser.add_argument("--decay", type=non_negative_seconds, default=0.3, help="decay seconds (default %(default)s)")
+    parser.add_argument(
+        "--start", type=non_negative_seconds, default=0.2, help="event time in seconds (default %(default)s)"
+    )
     add_curve_options(parser)
     parser.set_defaults(handler=run)
 
@@ -29,7 +32,10 @@ def run(args: argparse.Namespace) -> int:
     from mien.affect.envelope import Envelope
     from mien.character import Character
 
+    from mien.facs.catalogue import FACE_CHANNELS
+
     name = resolve_emotion(args.emotion)
+    check_curve_request(args.duration, args.fps, len(FACE_CHANNELS))
     character = Character(seed=args.seed, idle=not args.no_idle)
     envelope = Envelope(onset_s=args.onset, hold_s=args.hold, decay_s=args.decay)
     character.emote(name, args.intensity, start_s=args.start, envelope=envelope)

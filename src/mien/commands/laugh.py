@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from mien.commands._checks import input_file, output_file, positive_fps, positive_seconds
+
 __all__ = ["register", "run"]
 
 
@@ -18,18 +20,20 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     )
     parser.add_argument("type", nargs="?", help="laugh type id (see --list), e.g. sly_smile")
     parser.add_argument("--intensity", type=float, default=1.0, help="gain 0..5, 1 = typical (default 1)")
-    parser.add_argument("--duration", type=float, default=None, help="length in seconds (default: typical)")
+    parser.add_argument("--duration", type=positive_seconds, default=None, help="length in seconds (default: typical)")
     parser.add_argument("--seed", type=int, default=0, help="random seed for natural variation (default 0)")
-    parser.add_argument("--fps", type=float, default=60.0, help="frames per second (default 60)")
-    parser.add_argument("--library", default=None, help="a learned library .npz (default: built-in)")
-    parser.add_argument("-o", "--output", default=None, help="output file: .csv, .json, .npz or .anim")
+    parser.add_argument("--fps", type=positive_fps, default=60.0, help="frames per second (default 60)")
+    parser.add_argument("--library", default=None, type=input_file, help="a learned library .npz (default: built-in)")
+    parser.add_argument(
+        "-o", "--output", default=None, type=output_file, help="output file: .csv, .json, .npz or .anim"
+    )
     parser.add_argument(
         "--curves",
         choices=("auto", "face", "controllers"),
         default="auto",
         help="which curves to write: face AUs, rig controllers, or auto (controllers for .anim, else face)",
     )
-    parser.add_argument("--plot", default=None, help="also plot the curves to this PNG")
+    parser.add_argument("--plot", default=None, type=output_file, help="also plot the curves to this PNG")
     parser.add_argument("--list", action="store_true", help="list the 13 types and exit")
     parser.set_defaults(handler=run)
 
@@ -41,6 +45,10 @@ def run(args: argparse.Namespace) -> int:
     from mien.errors import InvalidValueError
     from mien.laughter.taxonomy import TAXONOMY
 
+    if args.list and args.type:
+        raise InvalidValueError("type", args.type, "no laugh type with --list (it lists them all)")
+    if args.curves != "auto" and not args.output:
+        raise InvalidValueError("--curves", args.curves, "-o FILE as well (--curves chooses what that file holds)")
     if args.list:
         for name, r in TAXONOMY.items():
             aus = " ".join(f"AU{code}{side or ''}={value:g}" for code, side, value in r.aus)
@@ -53,6 +61,12 @@ def run(args: argparse.Namespace) -> int:
     from mien.laughter.generator import generate
     from mien.laughter.library import load_library
 
+    from mien.commands._checks import check_curve_request
+    from mien.facs.catalogue import FACE_CHANNELS
+    from mien.laughter.names import CONTROLLER_NAMES
+
+    if args.duration is not None:
+        check_curve_request(args.duration, args.fps, 2 * (len(FACE_CHANNELS) + len(CONTROLLER_NAMES)))
     library = load_library(args.library) if args.library else None
     result = generate(args.type, args.intensity, args.duration, args.seed, args.fps, library)
     if args.output:

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from mien.commands._checks import input_file, input_folder, output_file, output_folder
+
 __all__ = ["register", "run"]
 
 
@@ -16,24 +18,37 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "each laugh type by DTW, cluster them and keep the main cluster's representative curve. Per-video "
         "results are checkpointed in LIBRARY's work folder (<library>.work), so a re-run resumes.",
     )
-    parser.add_argument("video_dir", metavar="DIR", help="folder of the videos")
-    parser.add_argument("--labels", required=True, help="CSV with columns video,type,performer")
-    parser.add_argument("-o", "--output", required=True, metavar="LIBRARY", help="library file to write (.npz)")
+    parser.add_argument("video_dir", metavar="DIR", type=input_folder, help="folder of the videos")
+    parser.add_argument("--labels", required=True, type=input_file, help="CSV with columns video,type,performer")
+    parser.add_argument(
+        "-o", "--output", required=True, type=output_file, metavar="LIBRARY", help="library file to write (.npz)"
+    )
     parser.add_argument("--eps", type=float, default=0.2, help="controller hardness factor (default 0.2)")
     parser.add_argument("--workers", type=int, default=None, help="worker processes (default: one per CPU; 0: none)")
     parser.add_argument("--scheduler", default=None, metavar="ADDRESS", help="run on this Dask scheduler instead")
     parser.add_argument("--method", choices=("medoid", "dba"), default="medoid", help="representative curve")
-    parser.add_argument("--report-dir", default=None, help="write summary, DTW tables and plots here")
+    parser.add_argument(
+        "--report-dir", default=None, type=output_folder, help="write summary, DTW tables and plots here"
+    )
     parser.add_argument("--seed", type=int, default=0, help="clustering seed (default 0)")
-    parser.add_argument("--model", default=None, help="face_landmarker.task (default: MIEN_FACE_LANDMARKER)")
+    parser.add_argument(
+        "--model", default=None, type=input_file, help="face_landmarker.task (default: MIEN_FACE_LANDMARKER)"
+    )
     parser.add_argument("--quiet", action="store_true", help="no progress bars")
     parser.set_defaults(handler=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """Handle ``mien learn``; returns the exit code."""
+    from mien.commands._checks import check_scheduler
     from mien.laughter.learn import learn_library
 
+    if args.scheduler is not None:
+        if args.workers is not None:
+            from mien.commands._checks import refuse_option
+
+            refuse_option("--workers", args.workers, "the Dask scheduler's workers do the work; give one or the other")
+        check_scheduler(args.scheduler)  # fail in seconds, naming the address, before tracking anything
     result = learn_library(
         args.video_dir,
         args.labels,

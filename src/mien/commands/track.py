@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from mien.commands._checks import input_file, non_negative_seconds, output_file
+
 __all__ = ["register", "run"]
 
 
@@ -18,12 +20,19 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
             "interpolated, longer ones split the video into takes. Results are cached per video."
         ),
     )
-    parser.add_argument("video", help="video file (mp4, mov, avi, mkv, webm...)")
-    parser.add_argument("-o", "--output", help="write the track to this .npz or .json file")
-    parser.add_argument("--model", help="face_landmarker.task (default: $MIEN_FACE_LANDMARKER or the config file)")
+    parser.add_argument("video", type=input_file, help="video file (mp4, mov, avi, mkv, webm...)")
+    parser.add_argument(
+        "-o", "--output", type=output_file, help="write the track to this .npz or .json file (folders are made)"
+    )
+    parser.add_argument(
+        "--model", type=input_file, help="face_landmarker.task (default: $MIEN_FACE_LANDMARKER or the config file)"
+    )
     parser.add_argument("--no-cache", action="store_true", help="track again even when a cached result exists")
     parser.add_argument(
-        "--max-gap-s", type=float, default=0.2, help="longest gap (seconds) filled by interpolation (default 0.2)"
+        "--max-gap-s",
+        type=non_negative_seconds,
+        default=0.2,
+        help="longest gap (seconds) filled by interpolation (default 0.2)",
     )
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(handler=run)

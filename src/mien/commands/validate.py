@@ -7,6 +7,8 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from mien.commands._checks import input_file, input_folder, output_folder
+
 __all__ = ["parse_heads", "register"]
 
 _VIEWS_STUDY = ("frontal-1m", "frontal-3m", "oblique-1m", "oblique-3m", "lateral-1m", "lateral-3m")
@@ -58,7 +60,13 @@ def _check_heads(heads: list[tuple[str, str]]) -> None:
 
 
 def _add_common(parser: argparse.ArgumentParser, default_out: str) -> None:
-    parser.add_argument("-o", "--out", type=Path, default=Path(default_out), help="output folder (default %(default)s)")
+    parser.add_argument(
+        "-o",
+        "--out",
+        type=output_folder,
+        default=Path(default_out),
+        help="output folder, made if missing (default %(default)s)",
+    )
     parser.add_argument(
         "--head",
         action="append",
@@ -66,9 +74,13 @@ def _add_common(parser: argparse.ArgumentParser, default_out: str) -> None:
         help="head to validate, repeatable or comma-separated: ict:a, ict:b, builtin:default, builtin:b "
         "(default: every installed head and identity)",
     )
-    parser.add_argument("--landmarker", help="face_landmarker.task (default: $MIEN_FACE_LANDMARKER or the config)")
     parser.add_argument(
-        "--emotion-model", help="emotion classifier .tflite (default: $MIEN_EMOTION_MODEL or the config)"
+        "--landmarker", type=input_file, help="face_landmarker.task (default: $MIEN_FACE_LANDMARKER or the config)"
+    )
+    parser.add_argument(
+        "--emotion-model",
+        type=input_file,
+        help="emotion classifier .tflite (default: $MIEN_EMOTION_MODEL or the config)",
     )
     parser.add_argument("--size", default="512x512", help="render size WIDTHxHEIGHT (default %(default)s)")
     parser.add_argument("--quiet", action="store_true", help="no progress bars")
@@ -90,7 +102,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     rig.add_argument("--aus", help="AU numbers, comma-separated (default: the 18 OpenFACS AUs)")
     rig.add_argument(
         "--human-data",
-        type=Path,
+        type=input_folder,
         help="folder of real human media (video/, images/) to check which AUs the detector sees on people "
         "(default: $MIEN_SHARED/data)",
     )
@@ -111,7 +123,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     emotions.set_defaults(handler=run_emotions)
 
     compare = sub.add_parser("compare", help="a human video vs the character (OpenFACS Fig. 5, and the closed loop)")
-    compare.add_argument("video", type=Path, help="video of a person performing the expression")
+    compare.add_argument("video", type=input_file, help="video of a person performing the expression")
     _add_common(compare, "mien-validate/compare")
     compare.add_argument("--expression", help="emotion, blend or AUs the person performs (e.g. joy); "
                          "without it only the closed loop runs")  # fmt: skip
@@ -121,8 +133,8 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 
     report = sub.add_parser("report", help="everything above in one self-contained HTML page")
     _add_common(report, "mien-validate")
-    report.add_argument("--video", type=Path, help="human video for the comparison section (optional)")
-    report.add_argument("--human-data", type=Path, help="real human media folder for the rig section")
+    report.add_argument("--video", type=input_file, help="human video for the comparison section (optional)")
+    report.add_argument("--human-data", type=input_folder, help="real human media folder for the rig section")
     report.add_argument("--expression", default="joy", help="expression the video shows (default %(default)s)")
     report.set_defaults(handler=run_report)
 
