@@ -1,0 +1,673 @@
+// mien viewer: a character's head in 3D (three.js morph targets), driven live by the server's WebSocket.
+//
+// Data flow: controls -> JSON commands over the WebSocket (HTTP API when it is closed) -> the server's
+// scheduler -> one binary frame per tick -> morph-target weights and head/eye pose -> a render when they
+// change. The head is the server's glTF (GET /api/characters/{id}/head.glb); weights arrive in the order of
+// its morph targets (glTF mesh extras.targetNames). Control lists come from /viewer/controls.json, built
+// from the package's catalogues.
+import * as THREE from "three";
+import { GLTFLoader } from "three/addons/loaders/GLTFLoader.js";
+import { OrbitControls } from "three/addons/controls/OrbitControls.js";
+
+const params = new URLSearchParams(location.search);
+const token = params.get("token") || "";
+const $ = (id) => document.getElementById(id);
+
+// ---------------------------------------------------------------------------------------------------------
+// Wire format of a frame (little-endian), see mien.server:
+//   0-3 "MIEN", 4-5 u16 version 1, 6-7 u16 n_weights, 8-11 u32 tick, 12-15 u32 character row,
+//   16-23 f64 time_s, 24-43 5 x f32 pose degrees (head yaw, pitch, roll, gaze yaw, pitch), 44.. f16 weights.
+const FRAME_HEADER_BYTES = 44;
+const FRAME_MAGIC = [0x4d, 0x49, 0x45, 0x4e]; // "MIEN"
+
+function halfToFloat(h) {
+  const sign = h & 0x8000 ? -1 : 1;
+  const exponent = (h >> 10) & 0x1f;
+  const fraction = h & 0x3ff;
+  if (exponent === 0) return sign * fraction * 2 ** -24;
+  if (exponent === 31) return fraction ? NaN : sign * Infinity;
+  return sign * (1 + fraction / 1024) * 2 ** (exponent - 15);
+}
+
+/** Decode one binary frame; returns null (and says why in `error`) when it is not a version-1 frame. */
+export function decodeFrame(buffer) {
+  if (buffer.byteLength < FRAME_HEADER_BYTES) return { error: `frame of ${buffer.byteLength} bytes` };
+  const view = new DataView(buffer);
+  for (let i = 0; i < 4; i++) {
+    if (view.getUint8(i) !== FRAME_MAGIC[i]) return { error: "frame without the MIEN magic" };
+  }
+  const version = view.getUint16(4, true);
+  if (version !== 1) return { error: `frame version ${version} (this page reads version 1)` };
+  const n = view.getUint16(6, true);
+  if (buffer.byteLength < FRAME_HEADER_BYTES + 2 * n) return { error: "truncated frame" };
+  const pose = new Float32Array(5);
+  for (let i = 0; i < 5; i++) pose[i] = view.getFloat32(24 + 4 * i, true);
+  const weights = new Float32Array(n);
+  for (let i = 0; i < n; i++) weights[i] = halfToFloat(view.getUint16(FRAME_HEADER_BYTES + 2 * i, true));
+  return {
+    tick: view.getUint32(8, true),
+    row: view.getUint32(12, true),
+    timeS: view.getFloat64(16, true),
+    pose,
+    weights,
+  };
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// State shared by the parts of the page.
+const state = {
+  controls: null,
+  character: params.get("character"),
+  ws: null,
+  wsOpen: false,
+  reconnectMs: 500,
+  frame: null, // latest decoded frame, applied on the next animation frame
+  frameDirty: false,
+  lastTick: null,
+  ticksSeen: 0,
+  head: null, // { root, pivot, meshes: [{mesh, map: Int32Array}], names: [...], eyes: [...] }
+  needsRender: true,
+  renders: 0,
+  loadingHead: null,
+};
+window.mienViewer = state; // for tests and the curious: read-only use
+
+function setStatus(message) {
+  $("status-message").textContent = message;
+}
+
+function setConnection(text, good) {
+  const el = $("status-connection");
+  el.textContent = text;
+  el.className = good ? "good" : "bad";
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Server access.
+function authHeaders() {
+  return token ? { Authorization: `Bearer ${token}` } : {};
+}
+
+function withToken(url) {
+  if (!token) return url;
+  return url + (url.includes("?") ? "&" : "?") + "token=" + encodeURIComponent(token);
+}
+
+async function api(method, path, body, contentType = "application/json") {
+  const init = { method, headers: { ...authHeaders() } };
+  if (body !== undefined) {
+    init.headers["Content-Type"] = contentType;
+    init.body = contentType === "application/json" ? JSON.stringify(body) : body;
+  }
+  const response = await fetch(withToken(path), init);
+  const text = await response.text();
+  let data = null;
+  try {
+    data = text ? JSON.parse(text) : null;
+  } catch {
+    data = text;
+  }
+  if (!response.ok) {
+    const detail = data && typeof data === "object" ? data.detail || data.error || JSON.stringify(data) : text;
+    throw new Error(`${method} ${path}: ${response.status} ${typeof detail === "string" ? detail : JSON.stringify(detail)}`);
+  }
+  return data;
+}
+
+const HTTP_ROUTES = { emotion: "emotion", pad: "pad", laughter: "laughter" };
+
+/** Send a JSON command for the watched character: over the WebSocket, or the HTTP API when it is closed. */
+function send(command) {
+  if (state.wsOpen) {
+    state.ws.send(JSON.stringify(command));
+    return;
+  }
+  if (!state.character) {
+    setStatus("no character to command");
+    return;
+  }
+  const key = Object.keys(command).find((k) => k in HTTP_ROUTES);
+  const route = key ? HTTP_ROUTES[key] : Object.keys(command).some((k) => /^AU\d/.test(k)) ? "aus" : null;
+  if (!route) {
+    setStatus("not connected: command not sent");
+    return;
+  }
+  api("POST", `/api/characters/${encodeURIComponent(state.character)}/${route}`, command).catch((e) => setStatus(e.message));
+}
+
+function connect() {
+  if (!state.character) return;
+  const scheme = location.protocol === "https:" ? "wss:" : "ws:";
+  const url = withToken(`${scheme}//${location.host}/ws?character=${encodeURIComponent(state.character)}`);
+  const ws = new WebSocket(url);
+  ws.binaryType = "arraybuffer";
+  state.ws = ws;
+  setConnection("connecting", false);
+  ws.onopen = () => {
+    state.wsOpen = true;
+    state.reconnectMs = 500;
+    setConnection("live", true);
+  };
+  ws.onmessage = (event) => {
+    if (typeof event.data === "string") {
+      onServerText(event.data);
+      return;
+    }
+    const frame = decodeFrame(event.data);
+    if (frame.error) {
+      setStatus(frame.error);
+      return;
+    }
+    state.frame = frame;
+    state.frameDirty = true;
+    state.ticksSeen += 1;
+  };
+  ws.onclose = () => {
+    if (state.ws !== ws) return; // replaced on purpose
+    state.wsOpen = false;
+    setConnection("disconnected", false);
+    setTimeout(() => state.ws === ws && connect(), state.reconnectMs);
+    state.reconnectMs = Math.min(state.reconnectMs * 2, 5000);
+  };
+}
+
+function onServerText(text) {
+  let message;
+  try {
+    message = JSON.parse(text);
+  } catch {
+    setStatus(text.slice(0, 120));
+    return;
+  }
+  if (message.error) setStatus(`server: ${message.error}`);
+  else if (message.info || message.message) setStatus(String(message.info || message.message));
+}
+
+function watch(characterId) {
+  if (characterId === state.character && state.head) return;
+  state.character = characterId;
+  const url = new URL(location.href);
+  url.searchParams.set("character", characterId);
+  history.replaceState(null, "", url);
+  state.frame = null;
+  loadHead(characterId);
+  if (state.wsOpen) state.ws.send(JSON.stringify({ watch: characterId }));
+  else if (!state.ws || state.ws.readyState > 1) connect();
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// The 3D scene.
+const canvas = $("view");
+const renderer = new THREE.WebGLRenderer({ canvas, antialias: true });
+renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
+renderer.toneMapping = THREE.ACESFilmicToneMapping;
+renderer.toneMappingExposure = 1.05;
+const scene = new THREE.Scene();
+scene.background = new THREE.Color(0x1d2023);
+const camera = new THREE.PerspectiveCamera(22, 1, 0.05, 50);
+camera.position.set(0, -0.03, 1);
+const orbit = new OrbitControls(camera, canvas);
+orbit.target.set(0, -0.03, 0);
+orbit.enableDamping = false;
+orbit.addEventListener("change", () => (state.needsRender = true));
+
+// A key light above-right of the face, a softer fill from the left, a rim from behind, sky/ground ambient.
+scene.add(new THREE.HemisphereLight(0xdfe6f0, 0x3a3430, 1.1));
+const key = new THREE.DirectionalLight(0xfff3e6, 2.2);
+key.position.set(0.6, 0.8, 1.2);
+scene.add(key);
+const fill = new THREE.DirectionalLight(0xdde6ff, 0.7);
+fill.position.set(-1.0, 0.2, 0.8);
+scene.add(fill);
+const rim = new THREE.DirectionalLight(0xffffff, 0.9);
+rim.position.set(0.0, 0.6, -1.2);
+scene.add(rim);
+
+function resize() {
+  const width = canvas.clientWidth;
+  const height = canvas.clientHeight;
+  if (!width || !height) return;
+  renderer.setSize(width, height, false);
+  camera.aspect = width / height;
+  camera.updateProjectionMatrix();
+  state.needsRender = true;
+}
+new ResizeObserver(resize).observe(canvas);
+
+function applyCameraPreset(preset) {
+  camera.fov = preset.fov_deg;
+  camera.position.set(...preset.position_m);
+  orbit.target.set(...preset.target_m);
+  camera.updateProjectionMatrix();
+  orbit.update();
+  document.querySelectorAll("#camera-buttons button").forEach((b) => b.classList.toggle("active", b.dataset.name === preset.name));
+  state.needsRender = true;
+}
+
+const NECK_PIVOT_M = [0, -0.09, -0.05]; // fallback pivot (rig frame) when the glTF has no head node
+
+async function loadHead(characterId) {
+  const loading = (state.loadingHead = characterId);
+  setStatus(`loading ${characterId}'s head...`);
+  const loader = new GLTFLoader();
+  loader.setRequestHeader(authHeaders());
+  let gltf;
+  try {
+    gltf = await loader.loadAsync(withToken(`/api/characters/${encodeURIComponent(characterId)}/head.glb`));
+  } catch (error) {
+    if (state.loadingHead === loading) setStatus(`could not load the head of ${characterId}: ${error.message || error}`);
+    return;
+  }
+  if (state.loadingHead !== loading) return; // another character was picked meanwhile
+  if (state.head) {
+    scene.remove(state.head.pivot);
+    state.head.pivot.traverse((o) => {
+      if (o.geometry) o.geometry.dispose();
+    });
+  }
+  state.head = prepareHead(gltf.scene);
+  scene.add(state.head.pivot);
+  state.frameDirty = state.frame !== null;
+  state.needsRender = true;
+  setStatus(`${characterId}: ${state.head.names.length} morph targets`);
+}
+
+/** Wrap the glTF scene for posing and map every morph mesh's targets onto the frame's weight order. */
+function prepareHead(root) {
+  const morphMeshes = [];
+  root.traverse((o) => {
+    if (o.isMesh && o.morphTargetDictionary) morphMeshes.push(o);
+  });
+  const namesOf = (mesh) => {
+    const names = [];
+    for (const [name, index] of Object.entries(mesh.morphTargetDictionary)) names[index] = name;
+    return names;
+  };
+  morphMeshes.sort((a, b) => b.morphTargetInfluences.length - a.morphTargetInfluences.length);
+  const names = morphMeshes.length ? namesOf(morphMeshes[0]) : [];
+  const order = new Map(names.map((n, i) => [n, i]));
+  const meshes = morphMeshes.map((mesh) => ({
+    mesh,
+    map: Int32Array.from(namesOf(mesh), (n) => (order.has(n) ? order.get(n) : -1)),
+  }));
+  // Head pose turns a pivot at the neck: the glTF's "head"/"neck" node when it has one, else a fixed point.
+  let headNode = null;
+  root.traverse((o) => {
+    if (!headNode && /^(head|neck)$/i.test(o.name) && !o.isMesh) headNode = o;
+  });
+  const pivot = new THREE.Group();
+  pivot.name = "mien-head-pivot";
+  const at = headNode ? headNode.getWorldPosition(new THREE.Vector3()).toArray() : NECK_PIVOT_M;
+  pivot.position.set(...at);
+  root.position.set(-at[0], -at[1], -at[2]);
+  pivot.add(root);
+  const eyes = [];
+  root.traverse((o) => {
+    if (/^eye[_ .-]?(l|r|left|right)$/i.test(o.name)) eyes.push({ node: o, rest: o.quaternion.clone() });
+  });
+  return { root, pivot, meshes, names, eyes };
+}
+
+const DEG = Math.PI / 180;
+const euler = new THREE.Euler();
+const gazeQuaternion = new THREE.Quaternion();
+
+function applyFrame(frame) {
+  const head = state.head;
+  if (!head) return;
+  const w = frame.weights;
+  for (const { mesh, map } of head.meshes) {
+    const influences = mesh.morphTargetInfluences;
+    for (let i = 0; i < map.length; i++) influences[i] = map[i] >= 0 && map[i] < w.length ? w[map[i]] : 0;
+  }
+  const [yaw, pitch, roll, gazeYaw, gazePitch] = frame.pose;
+  // mien: yaw > 0 turns to the character's left (+x), pitch > 0 raises the chin, roll > 0 toward the left
+  // shoulder; in three.js (+y up, +z toward the viewer) that is +y, -x and -z rotations.
+  head.pivot.rotation.set(-pitch * DEG, yaw * DEG, -roll * DEG, "YXZ");
+  if (head.eyes.length) {
+    gazeQuaternion.setFromEuler(euler.set(-gazePitch * DEG, gazeYaw * DEG, 0, "YXZ"));
+    for (const eye of head.eyes) eye.node.quaternion.copy(eye.rest).multiply(gazeQuaternion);
+  }
+}
+
+// Render on demand: only when a new frame, the camera or the window changed (cheap on a laptop's battery).
+let fpsCount = 0;
+let fpsSince = performance.now();
+function animate(now) {
+  if (state.frameDirty && state.frame) {
+    applyFrame(state.frame);
+    state.frameDirty = false;
+    state.needsRender = true;
+    if (state.frame.tick !== state.lastTick) {
+      state.lastTick = state.frame.tick;
+      $("status-tick").textContent = `tick ${state.frame.tick}  t ${state.frame.timeS.toFixed(2)} s`;
+    }
+  }
+  if (state.needsRender) {
+    renderer.render(scene, camera);
+    state.needsRender = false;
+    state.renders += 1;
+    fpsCount += 1;
+  }
+  if (now - fpsSince >= 1000) {
+    $("status-fps").textContent = `${Math.round((fpsCount * 1000) / (now - fpsSince))} fps`;
+    fpsCount = 0;
+    fpsSince = now;
+  }
+  requestAnimationFrame(animate);
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Controls.
+function button(label, onClick, extra = {}) {
+  const b = document.createElement("button");
+  b.type = "button";
+  b.textContent = label;
+  Object.assign(b.dataset, extra.data || {});
+  if (extra.title) b.title = extra.title;
+  if (extra.className) b.className = extra.className;
+  b.addEventListener("click", onClick);
+  return b;
+}
+
+function bindOutput(input, output, digits) {
+  const update = () => (output.textContent = Number(input.value).toFixed(digits));
+  input.addEventListener("input", update);
+  update();
+}
+
+function buildCameras(cameras) {
+  const box = $("camera-buttons");
+  for (const preset of cameras) {
+    const [view, distance] = preset.name.split("-");
+    box.append(button(`${view} ${distance.replace("m", " m")}`, () => applyCameraPreset(preset), { data: { name: preset.name } }));
+  }
+  applyCameraPreset(cameras[0]);
+}
+
+function buildEmotions(controls) {
+  const box = $("emotion-buttons");
+  const intensity = $("emotion-intensity");
+  intensity.max = controls.emotion_intensity_max;
+  bindOutput(intensity, $("emotion-intensity-value"), 1);
+  const emote = (name) => send({ emotion: name, intensity: Number(intensity.value) });
+  for (const name of controls.emotions) box.append(button(name, () => emote(name), { data: { emotion: name } }));
+  for (const name of controls.blends) {
+    box.append(button(name, () => emote(name), { data: { emotion: name }, className: "blend", title: "blend" }));
+  }
+}
+
+function buildPad() {
+  const pad = $("pad");
+  const context = pad.getContext("2d");
+  const dominance = $("pad-dominance");
+  bindOutput(dominance, $("pad-dominance-value"), 2);
+  let point = [0, 0];
+  const draw = () => {
+    const { width, height } = pad;
+    context.clearRect(0, 0, width, height);
+    context.strokeStyle = "#3a4046";
+    context.beginPath();
+    context.moveTo(width / 2, 0);
+    context.lineTo(width / 2, height);
+    context.moveTo(0, height / 2);
+    context.lineTo(width, height / 2);
+    context.stroke();
+    context.fillStyle = "#9aa3ab";
+    context.font = "10px system-ui";
+    context.fillText("pleasure \u2192", width - 62, height / 2 - 4);
+    context.fillText("arousal \u2191", width / 2 + 4, 11);
+    const x = ((point[0] + 1) / 2) * width;
+    const y = ((1 - point[1]) / 2) * height;
+    context.fillStyle = "#6fb3d9";
+    context.beginPath();
+    context.arc(x, y, 5, 0, 2 * Math.PI);
+    context.fill();
+    $("pad-value").textContent = `P ${point[0].toFixed(2)} A ${point[1].toFixed(2)}`;
+  };
+  const sendPad = () => send({ pad: [point[0], point[1], Number(dominance.value)] });
+  const fromEvent = (event) => {
+    const r = pad.getBoundingClientRect();
+    const clamp = (v) => Math.max(-1, Math.min(1, v));
+    point = [clamp(((event.clientX - r.left) / r.width) * 2 - 1), clamp(1 - ((event.clientY - r.top) / r.height) * 2)];
+    draw();
+  };
+  let dragging = false;
+  pad.addEventListener("pointerdown", (e) => {
+    dragging = true;
+    pad.setPointerCapture(e.pointerId);
+    fromEvent(e);
+    sendPad();
+  });
+  pad.addEventListener("pointermove", (e) => {
+    if (!dragging) return;
+    fromEvent(e);
+    throttledPad();
+  });
+  pad.addEventListener("pointerup", () => {
+    dragging = false;
+    sendPad();
+  });
+  const throttledPad = throttle(sendPad, 100);
+  dominance.addEventListener("change", sendPad);
+  $("pad-reset").addEventListener("click", () => {
+    point = [0, 0];
+    dominance.value = 0;
+    dominance.dispatchEvent(new Event("input"));
+    draw();
+    sendPad();
+  });
+  draw();
+}
+
+function buildLaughter(types) {
+  const box = $("laughter-buttons");
+  const intensity = $("laughter-intensity");
+  bindOutput(intensity, $("laughter-intensity-value"), 1);
+  for (const t of types) {
+    const title = `${t.family}, ${t.duration_s.toFixed(1)} s: ${t.notes}`;
+    box.append(button(t.label, () => send({ laughter: t.type, intensity: Number(intensity.value) }), { data: { laughter: t.type }, title }));
+  }
+}
+
+function buildIdle(toggles) {
+  const box = $("idle-toggles");
+  const inputs = [];
+  const sendIdle = () => {
+    const settings = {};
+    for (const { input, flags } of inputs) for (const flag of flags) settings[flag] = input.checked;
+    send({ idle: settings });
+  };
+  for (const toggle of toggles) {
+    const label = document.createElement("label");
+    const input = document.createElement("input");
+    input.type = "checkbox";
+    input.checked = true;
+    input.dataset.idle = toggle.name;
+    input.addEventListener("change", sendIdle);
+    label.append(input, toggle.name);
+    box.append(label);
+    inputs.push({ input, flags: toggle.flags });
+  }
+}
+
+function buildActionUnits(controls) {
+  const ticks = $("au-ticks");
+  for (let v = 1; v <= controls.au_max; v++) {
+    const option = document.createElement("option");
+    option.value = v;
+    option.label = controls.intensity_letters[v - 1];
+    ticks.append(option);
+  }
+  const box = $("au-sliders");
+  const sliders = [];
+  const sendState = () => {
+    const command = {};
+    for (const s of sliders) command[s.dataset.au] = Number(s.value);
+    send(command);
+  };
+  const throttledSend = throttle(sendState, 80);
+  for (const au of controls.aus) {
+    const row = document.createElement("div");
+    row.className = "au";
+    row.title = `${au.label} ${au.name}${au.lateral ? " (both sides)" : ""}${au.openfacs ? " - OpenFACS" : ""}`;
+    const code = document.createElement("span");
+    code.className = "code" + (au.openfacs ? " openfacs" : "");
+    code.textContent = au.label;
+    const track = document.createElement("div");
+    track.className = "track";
+    const input = document.createElement("input");
+    input.type = "range";
+    input.min = 0;
+    input.max = controls.au_max;
+    input.step = 0.1;
+    input.value = 0;
+    input.setAttribute("list", "au-ticks");
+    input.dataset.au = au.label;
+    input.setAttribute("aria-label", `${au.label} ${au.name}`);
+    const letters = document.createElement("div");
+    letters.className = "letters";
+    for (const letter of controls.intensity_letters) {
+      const span = document.createElement("span");
+      span.textContent = letter;
+      letters.append(span);
+    }
+    track.append(input, letters);
+    const output = document.createElement("output");
+    const show = () => {
+      const v = Number(input.value);
+      output.textContent = v === 0 ? "0" : intensityName(v, controls.intensity_letters);
+      output.classList.toggle("on", v > 0);
+    };
+    input.addEventListener("input", () => {
+      show();
+      throttledSend();
+    });
+    input.addEventListener("change", sendState);
+    show();
+    row.append(code, track, output);
+    box.append(row);
+    sliders.push(input);
+  }
+  $("au-reset").addEventListener("click", () => {
+    for (const s of sliders) {
+      s.value = 0;
+      s.dispatchEvent(new Event("input"));
+    }
+    sendState();
+  });
+}
+
+/** "C" for 3, "C+0.4" style for fractional values (FACS letters A..E = 1..5). */
+function intensityName(value, letters) {
+  const whole = Math.round(value);
+  if (Math.abs(value - whole) < 1e-6 && whole >= 1) return letters[whole - 1];
+  return value.toFixed(1);
+}
+
+function throttle(fn, ms) {
+  let timer = null;
+  return () => {
+    if (timer) return;
+    timer = setTimeout(() => {
+      timer = null;
+      fn();
+    }, ms);
+  };
+}
+
+// Characters: list, pick, create, remove (HTTP API).
+function characterId(entry) {
+  return typeof entry === "string" ? entry : entry.id ?? entry.name;
+}
+
+async function refreshCharacters(preferred) {
+  let list;
+  try {
+    list = await api("GET", "/api/characters");
+  } catch (error) {
+    setStatus(error.message);
+    return [];
+  }
+  const entries = Array.isArray(list) ? list : list.characters || [];
+  const ids = entries.map(characterId).filter((id) => id !== undefined && id !== null).map(String);
+  const picker = $("character-picker");
+  picker.replaceChildren(...ids.map((id) => new Option(id, id)));
+  const chosen = ids.includes(preferred) ? preferred : ids[0];
+  if (chosen !== undefined) {
+    picker.value = chosen;
+    watch(chosen);
+  } else {
+    setStatus("no characters: create one");
+  }
+  return ids;
+}
+
+function buildCharacters() {
+  $("character-picker").addEventListener("change", (e) => watch(e.target.value));
+  $("character-create").addEventListener("click", async () => {
+    const name = $("character-new-name").value.trim();
+    try {
+      const created = await api("POST", "/api/characters", name ? { id: name } : {});
+      $("character-new-name").value = "";
+      await refreshCharacters(created ? String(characterId(created)) : name);
+    } catch (error) {
+      setStatus(error.message);
+    }
+  });
+  $("character-remove").addEventListener("click", async () => {
+    const id = $("character-picker").value;
+    if (!id) return;
+    try {
+      await api("DELETE", `/api/characters/${encodeURIComponent(id)}`);
+      state.head && scene.remove(state.head.pivot);
+      state.head = null;
+      state.character = null;
+      state.needsRender = true;
+      await refreshCharacters();
+    } catch (error) {
+      setStatus(error.message);
+    }
+  });
+}
+
+function buildClip() {
+  $("clip-play").addEventListener("click", async () => {
+    const file = $("clip-file").files[0];
+    if (!file) {
+      setStatus("choose a clip file first");
+      return;
+    }
+    if (!state.character) return;
+    try {
+      const path = `/api/characters/${encodeURIComponent(state.character)}/clip?filename=${encodeURIComponent(file.name)}`;
+      await api("POST", path, await file.arrayBuffer(), "application/octet-stream");
+      setStatus(`playing ${file.name}`);
+    } catch (error) {
+      setStatus(error.message);
+    }
+  });
+}
+
+async function main() {
+  requestAnimationFrame(animate);
+  try {
+    state.controls = await api("GET", "/viewer/controls.json");
+  } catch (error) {
+    setStatus(error.message);
+    return;
+  }
+  const controls = state.controls;
+  buildCameras(controls.cameras);
+  buildEmotions(controls);
+  buildPad();
+  buildLaughter(controls.laughter);
+  buildIdle(controls.idle);
+  buildActionUnits(controls);
+  buildCharacters();
+  buildClip();
+  await refreshCharacters(state.character);
+  document.body.dataset.ready = "1";
+}
+
+main();
