@@ -136,9 +136,12 @@ def test_jaw_open(rig: Rig) -> None:
     d = dense(rig, "jawOpen")
     assert d[rig.landmarks[8], 1] < -0.015  # chin down
     opening = d[rig.landmarks[66], 1] - d[rig.landmarks[62], 1]
-    assert -0.032 < opening < -0.02  # the mouth opens 2-3 cm
+    assert -0.035 < opening < -0.025  # the mouth opens about 3 cm
     upper_lip = rig.regions["upper_lip"]
-    assert moved(rig, "jawOpen", upper_lip[np.abs(rig.neutral[upper_lip, 0]) < 0.015]) < 1e-4
+    # the lip corners are drawn in and down (an oval opening), the upper lip's middle stays within 1 mm
+    assert moved(rig, "jawOpen", upper_lip[np.abs(rig.neutral[upper_lip, 0]) < 0.01]) < 1e-3
+    corner = rig.landmarks[48]
+    assert dense(rig, "jawOpen")[corner, 0] > 0.002 and dense(rig, "jawOpen")[corner, 1] < -0.004
     assert moved(rig, "jawOpen", rig.regions["teeth_upper"]) == 0.0
     assert dense(rig, "jawOpen")[rig.regions["teeth_lower"], 1].max() < -0.01
     assert moved(rig, "jawOpen", np.concatenate([rig.regions["eye_L"], rig.regions["brows"]])) == 0.0
@@ -247,7 +250,7 @@ def test_open_jaw_shows_rows_of_upper_and_lower_teeth(identity: str) -> None:
     lips, upper, lower = _pixels(rgb, 0), _pixels(rgb, 1), _pixels(rgb, 2)
     mouth_width = np.ptp(lips[:, 1])
     for teeth in (upper, lower):
-        assert len(teeth) > 150  # a row, not a sliver at the corners
+        assert len(teeth) > 80  # a row, not a sliver at the corners (the oval opening hides some upper teeth)
         assert np.ptp(teeth[:, 1]) > 0.6 * mouth_width  # spanning most of the mouth
         middle = np.abs(teeth[:, 1] - lips[:, 1].mean()) < 0.15 * mouth_width
         assert middle.sum() > 20  # the incisors show at the front, not only the side teeth

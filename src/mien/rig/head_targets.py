@@ -4,7 +4,8 @@ Each target is a smooth weight field (Gaussians in the frontal design coordinate
 slits' side fields so an upper-lip target never drags the lower lip) times a displacement, or a rotation:
 the jaw turns about a hinge in front of the ears, eyelids turn about the eyeball centre (so they slide over
 the eyeball), eyeballs turn about their centres. Magnitudes follow a real adult face: a full smile lifts the
-lip corner about 1 cm up and out; ``jawOpen`` = 1 drops the lower lip about 2.5 cm; a blink closes the lids.
+lip corner about 1 cm up and out; ``jawOpen`` = 1 opens the lips about 3 cm, the chin going down and a little back
+(the condyle slides forward) and the corners drawn in, so the opening is an oval; a blink closes the lids.
 ``tongueOut`` pushes the tongue 2.6 cm forward (visible with the jaw open). Units: metres.
 """
 
@@ -31,8 +32,8 @@ from mien.rig.head_geometry import (
 
 __all__ = ["JAW_OPEN_RAD", "arkit_deltas", "jaw_weights", "lid_weights"]
 
-JAW_OPEN_RAD = 0.22
-"""Jaw rotation at ``jawOpen`` = 1, radians (about 12.6 degrees)."""
+JAW_OPEN_RAD = 0.32
+"""Jaw rotation at ``jawOpen`` = 1, radians (about 18 degrees)."""
 EYE_YAW_RAD = np.radians(30.0)
 """Eyeball rotation at ``eyeLookIn``/``eyeLookOut`` = 1."""
 EYE_PITCH_RAD = np.radians(25.0)
@@ -134,7 +135,7 @@ def arkit_deltas(mesh: HeadMesh) -> dict[str, np.ndarray]:
         out[f"eyeBlink{suffix}"] = lids(-0.88, 0.12)
         cheek = skin * gauss(x, yd, sgn * 0.034, -0.022, 0.012, 0.009) * (1.0 - lower) * (1.0 - upper)
         out[f"eyeSquint{suffix}"] = lids(-0.10, 0.30) + vec(cheek, (0.0, 0.0015, 0.0005))
-        out[f"eyeWide{suffix}"] = lids(0.35, -0.05)
+        out[f"eyeWide{suffix}"] = lids(0.5, -0.08)
         ball = (mesh.part == part).astype(float)
         look_up = _rot_x(v, c, EYE_PITCH_RAD * ball) - v
         look_down = _rot_x(v, c, -EYE_PITCH_RAD * ball) - v
@@ -148,7 +149,13 @@ def arkit_deltas(mesh: HeadMesh) -> dict[str, np.ndarray]:
     jaw = jaw_weights(mesh)
     hinge = np.array([0.0, float(shape.y(-0.02)), -0.075])
     jaw_open = _rot_x(v, hinge, -JAW_OPEN_RAD * jaw) - v
-    out["jawOpen"] = jaw_open
+    # The condyle also slides forward as the jaw opens, so the chin goes mostly down, less back.
+    out["jawOpen"] = jaw_open + vec(jaw, (0.0, 0.0, 0.012))
+    # A dropping jaw draws the lip corners in and down (the opening becomes an oval, not a wide slit).
+    # The upper lip follows less than the lower one: its middle stays put.
+    for sgn in (1.0, -1.0):
+        corner = front * gauss(x, yd, sgn * mw, ym, 0.008, 0.011) * (0.4 + 0.6 * low)
+        out["jawOpen"] += vec(corner, (-sgn * 0.0070, -0.0060, 0.0))
     out["jawForward"] = vec(jaw, (0.0, 0.0, 0.006))
     out["jawLeft"] = vec(jaw, (0.008, 0.0, 0.0))
     out["jawRight"] = vec(jaw, (-0.008, 0.0, 0.0))
@@ -204,14 +211,14 @@ def arkit_deltas(mesh: HeadMesh) -> dict[str, np.ndarray]:
 
     inner_y, mid_y, outer_y = (float(brow_line(bx)) for bx in (0.017, 0.031, 0.046))
     inner = brow(0.017, inner_y, 0.010, 0) + brow(-0.017, inner_y, 0.010, 1)
-    out["browInnerUp"] = vec(inner, (0.0, 0.009, 0.0005))
+    out["browInnerUp"] = vec(inner, (0.0, 0.012, 0.0005))
     for suffix, sgn, eye in (("Left", 1.0, 0), ("Right", -1.0, 1)):
         whole = brow(sgn * 0.031, mid_y, 0.019, eye)
         inner_side = brow(sgn * 0.017, inner_y, 0.010, eye)
         out[f"browDown{suffix}"] = vec(whole, (-sgn * 0.0035, -0.0060, 0.0015)) + vec(
             inner_side, (-sgn * 0.002, -0.001, 0.001)
         )
-        out[f"browOuterUp{suffix}"] = vec(brow(sgn * 0.046, outer_y, 0.012, eye), (0.0, 0.008, 0.0))
+        out[f"browOuterUp{suffix}"] = vec(brow(sgn * 0.046, outer_y, 0.012, eye), (0.0, 0.011, 0.0))
 
     # --- cheeks and nose ---
     ax = np.abs(x)
