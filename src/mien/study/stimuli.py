@@ -1,0 +1,300 @@
+"""A study's stimuli: render them with mien (or take supplied videos), hash them, write ``manifest.json``.
+
+Rendered Broekens stimuli: a :class:`~mien.character.Character` (idle blinks and head motion, seeded) emotes
+the expression at the design's intensity with the study envelope (onset 0.4 s, hold 0.3 s, decay 0.3 s),
+on the head and identity, in the basis, seen through the ``frontal``/``lateral`` camera preset of
+:mod:`mien.render.camera` at the distance. Mascaró stimuli: the character plays the laughter type
+(:mod:`mien.laughter`). Frames come from mien's renderer (:func:`mien.render.clip_render.iter_frames`) into
+H.264 MP4 (:class:`mien.render.video.Mp4Writer`); one renderer serves every stimulus with the same head,
+basis and camera.
+
+Each finished video gets a small ``.sNNN.done.json`` record (what was rendered and the file's SHA-256); a
+re-run skips stimuli whose record and hash still match, so a late failure keeps the finished videos and the
+next run resumes. ``manifest.json`` is written last, atomically.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from mien.errors import InvalidValueError, MissingAssetError
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from mien.study.design import Design, StimulusSpec
+
+__all__ = ["MANIFEST_NAME", "StimuliResult", "check_video", "file_sha256", "load_manifest", "make_stimuli"]
+
+MANIFEST_NAME = "manifest.json"
+"""File name of the manifest inside the stimuli folder."""
+
+
+@dataclass(frozen=True)
+class StimuliResult:
+    """What :func:`make_stimuli` did."""
+
+    manifest_path: Path
+    """The written ``manifest.json``."""
+    manifest: dict[str, Any]
+    """Its content."""
+    rendered: int
+    """Stimuli rendered or copied in this run."""
+    skipped: int
+    """Stimuli kept from an earlier run (record and hash matched)."""
+
+
+def file_sha256(path: str | os.PathLike[str]) -> str:
+    """Hex SHA-256 of a file's bytes (read in 1 MiB chunks)."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for chunk in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(chunk)
+    return digest.hexdigest()
+
+
+def check_video(path: str | os.PathLike[str]) -> tuple[float, float]:
+    """``(duration_s, fps)`` of the video at ``path`` after decoding every frame (PyAV).
+
+    Raises :class:`~mien.errors.MissingAssetError` when the file is missing and
+    :class:`~mien.errors.InvalidValueError` naming the file when it does not decode.
+    """
+    from mien.errors import MissingExtraError
+
+    path = Path(path)
+    if not path.is_file():
+        raise MissingAssetError(f"stimulus file {path} not found: fix its path in the design file")
+    try:
+        import av
+    except ImportError:
+        raise MissingExtraError("av", "track") from None
+    try:
+        with av.open(str(path)) as container:
+            if not container.streams.video:
+                raise InvalidValueError(f"stimulus file {path}", "no video stream", "a video file (MP4, WebM...)")
+            stream = container.streams.video[0]
+            n_frames = sum(1 for _ in container.decode(stream))
+            rate = stream.average_rate or stream.base_rate
+            fps = float(rate) if rate else 0.0
+    except av.error.FFmpegError as error:
+        raise InvalidValueError(
+            f"stimulus file {path}", "undecodable", f"a video that decodes (ffmpeg: {error})"
+        ) from None
+    if n_frames == 0 or fps <= 0:
+        raise InvalidValueError(f"stimulus file {path}", f"{n_frames} frames", "a video with frames and a frame rate")
+    return n_frames / fps, fps
+
+
+def _spec_key(design: Design, spec: StimulusSpec) -> str:
+    key: dict[str, Any] = {"expression": spec.expression, "conditions": spec.conditions}
+    if spec.file is None:
+        key.update(
+            duration_s=design.duration_s, onset_s=design.onset_s, fps=design.fps, size=design.size, seed=design.seed
+        )
+    else:
+        key["source_sha256"] = file_sha256(spec.file)
+    return json.dumps(key, sort_keys=True)
+
+
+def _record_path(out: Path, spec: StimulusSpec) -> Path:
+    return out / f".{spec.id}.done.json"
+
+
+def _finished(out: Path, spec: StimulusSpec, key: str) -> dict[str, Any] | None:
+    try:
+        record = json.loads(_record_path(out, spec).read_text())
+    except (OSError, ValueError):
+        return None
+    video = out / str(record.get("file", ""))
+    if record.get("key") != key or not video.is_file() or file_sha256(video) != record.get("sha256"):
+        return None
+    return dict(record)
+
+
+def _write_json_atomic(path: Path, data: Any) -> None:
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps(data, indent=2) + "\n")
+    os.replace(tmp, path)
+
+
+class _Scenes:
+    """Rigs, cameras and renderers, reused between stimuli that share them (one open renderer at a time)."""
+
+    def __init__(self, size: int) -> None:
+        self.size = (size, size)
+        self._rigs: dict[tuple[str, str, str], Any] = {}
+        self._key: tuple | None = None
+        self._renderer: Any = None
+
+    def rig(self, head: str, identity: str, basis: str) -> Any:
+        from mien.rig.heads import load_head
+
+        key = (head, identity, basis)
+        if key not in self._rigs:
+            self._rigs[key] = load_head(head, identity or None, feature_points=basis == "feature_points")
+        return self._rigs[key]
+
+    def renderer(self, rig_key: tuple[str, str, str], view: str, distance_m: float) -> Any:
+        from mien.render.camera import camera_from_options
+        from mien.render.clip_render import make_renderer
+
+        key = (*rig_key, view, distance_m)
+        if key != self._key:
+            self.close()
+            camera = camera_from_options(f"{view}-1m", distance_m=distance_m)
+            self._renderer = make_renderer(self.rig(*rig_key), camera, self.size, samples=0)
+            self._key = key
+        return self._renderer
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer, self._key = None, None
+
+
+def _face_clip(design: Design, spec: StimulusSpec) -> tuple[Any, np.ndarray | None]:
+    """(face Clip, feature weights or None) of a rendered stimulus."""
+    from mien.character import Character
+
+    if design.protocol == "mascaro":
+        character = Character(seed=design.seed)
+        laugh = character.laugh(spec.expression, start_s=design.onset_s)
+        duration = max(design.duration_s, design.onset_s + laugh.duration_s + 0.3)
+        return character.run(duration, design.fps), None
+    basis = str(spec.conditions["basis"])
+    character = Character(seed=design.seed, expression_basis=basis)
+    character.emote(spec.expression, float(spec.conditions["intensity"]), start_s=design.onset_s)
+    clip = character.run(design.duration_s, design.fps)
+    return clip, character.last_feature_weights
+
+
+def _render(design: Design, spec: StimulusSpec, scenes: _Scenes, video: Path) -> tuple[float, float]:
+    from mien.animate import face_to_rig
+    from mien.render.clip_render import iter_frames
+    from mien.render.video import Mp4Writer
+
+    conditions = spec.conditions
+    head = str(conditions.get("head", "default"))
+    identity = str(conditions.get("identity", ""))
+    basis = str(conditions.get("basis", "facs"))
+    view = str(conditions.get("view", "frontal"))
+    distance = float(conditions.get("distance_m", 1.0))
+    if design.protocol == "mascaro":
+        head, identity, basis, view, distance = "default", "", "facs", "frontal", 1.0
+    rig_key = (head, identity, basis)
+    rig = scenes.rig(*rig_key)
+    clip, features = _face_clip(design, spec)
+    weights, poses = face_to_rig(rig, clip, features)
+    renderer = scenes.renderer(rig_key, view, distance)
+    with Mp4Writer(video, clip.fps) as writer:
+        for image in iter_frames(rig, weights, renderer, poses):
+            writer.write(image)
+    return clip.n_frames / clip.fps, float(clip.fps)
+
+
+def make_stimuli(
+    design: Design,
+    out: str | os.PathLike[str] | None = None,
+    progress: bool = True,
+    on_stimulus: Callable[[str, bool], None] | None = None,
+) -> StimuliResult:
+    """Render (``source = "render"``) or check and copy (``source = "files"``) every stimulus of ``design``
+    into ``out`` (default: ``stimuli/`` next to the design file) and write ``manifest.json`` there.
+
+    Supplied files must exist and decode (else :class:`~mien.errors.MissingAssetError` /
+    :class:`~mien.errors.InvalidValueError` naming the file; all are checked before anything is written).
+    ``on_stimulus(id, skipped)`` is called after each stimulus.
+    """
+    from mien.progress import progress as progress_bar
+
+    folder = Path(out) if out is not None else design.path.parent / "stimuli"
+    supplied: dict[str, tuple[float, float]] = {}
+    for spec in design.stimuli:
+        if spec.file is not None:
+            supplied[spec.id] = check_video(spec.file)
+    folder.mkdir(parents=True, exist_ok=True)
+    scenes = _Scenes(design.size)
+    entries, rendered, skipped = [], 0, 0
+    try:
+        for spec in progress_bar(design.stimuli, total=len(design.stimuli), desc="stimuli", enabled=progress):
+            key = _spec_key(design, spec)
+            record = _finished(folder, spec, key)
+            was_done = record is not None
+            if record is None:
+                suffix = Path(spec.file).suffix.lower() if spec.file is not None else ".mp4"
+                video = folder / f"{spec.id}{suffix}"
+                if spec.file is not None:
+                    tmp = video.with_name(video.name + ".tmp")
+                    shutil.copyfile(spec.file, tmp)
+                    os.replace(tmp, video)
+                    duration_s, fps = supplied[spec.id]
+                else:
+                    duration_s, fps = _render(design, spec, scenes, video)
+                record = {
+                    "key": key,
+                    "file": video.name,
+                    "sha256": file_sha256(video),
+                    "duration_s": round(duration_s, 6),
+                    "fps": fps,
+                }
+                _write_json_atomic(_record_path(folder, spec), record)
+                rendered += 1
+            else:
+                skipped += 1
+            if on_stimulus is not None:
+                on_stimulus(spec.id, was_done)
+            entries.append(
+                {
+                    "id": spec.id,
+                    "file": record["file"],
+                    "sha256": record["sha256"],
+                    "expression": spec.expression,
+                    "conditions": spec.conditions,
+                    "duration_s": record["duration_s"],
+                    "fps": record["fps"],
+                }
+            )
+    finally:
+        scenes.close()
+    manifest = {
+        "study": design.name,
+        "protocol": design.protocol,
+        "design_sha256": design.sha256,
+        "stimuli": entries,
+    }
+    path = folder / MANIFEST_NAME
+    _write_json_atomic(path, manifest)
+    return StimuliResult(path, manifest, rendered, skipped)
+
+
+def load_manifest(folder: str | os.PathLike[str], verify: bool = True) -> dict[str, Any]:
+    """The manifest in ``folder``; with ``verify`` every stimulus file must exist and match its hash.
+
+    Raises :class:`~mien.errors.MissingAssetError` naming what is missing (run ``mien study stimuli``) and
+    :class:`~mien.errors.InvalidValueError` naming a file whose hash changed.
+    """
+    folder = Path(folder)
+    path = folder / MANIFEST_NAME
+    try:
+        manifest = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise MissingAssetError(f"{path} not found: run `mien study stimuli DESIGN.toml` first") from None
+    except ValueError as error:
+        raise InvalidValueError(str(path), "JSON", f"a manifest written by `mien study stimuli` ({error})") from None
+    if verify:
+        for entry in manifest.get("stimuli", []):
+            video = folder / entry["file"]
+            if not video.is_file():
+                raise MissingAssetError(f"stimulus file {video} not found: re-run `mien study stimuli`")
+            if file_sha256(video) != entry["sha256"]:
+                raise InvalidValueError(
+                    f"stimulus file {video}", "changed", "the file hashed in the manifest (re-run `mien study stimuli`)"
+                )
+    return dict(manifest)

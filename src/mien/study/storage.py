@@ -1,0 +1,522 @@
+"""Where answers live: SQLite by default, PostgreSQL by URL (SQLAlchemy Core, the same schema on both).
+
+Every answer is committed in its own transaction the moment it is given, keyed by (study, participant,
+stimulus, question) with ``INSERT ... ON CONFLICT DO NOTHING``: a double submit or a replayed page stores
+nothing twice, and a killed server or a closed browser loses nothing already answered. SQLite runs in WAL
+mode with a busy timeout; a database that stays locked or unreachable after a few retries raises
+:class:`StorageUnavailableError` (the runner answers HTTP 503), never a silent loss.
+
+Tables: ``stimuli`` (the manifest: id, expression, conditions as JSON, file, hash), ``participants``
+(their stored plan: sequence, label order, block order, arrival ordinal), ``shows`` (replays per stimulus,
+nrShows) and ``answers`` (one row per rated question).
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, TypeVar
+
+from mien.errors import InvalidValueError, MienError, MissingExtraError
+
+if TYPE_CHECKING:
+    import pandas as pd
+    import sqlalchemy as sa
+
+__all__ = [
+    "ANSWER_COLUMNS",
+    "ParticipantRecord",
+    "StorageUnavailableError",
+    "Store",
+    "database_url",
+    "now_iso",
+]
+
+T = TypeVar("T")
+
+ANSWER_COLUMNS: tuple[str, ...] = (
+    "study",
+    "participant",
+    "session_started_at",
+    "position",
+    "stimulus",
+    "protocol",
+    "expression",
+)
+"""First columns of the long answers table; the design factors, then :data:`TAIL_COLUMNS` follow."""
+
+TAIL_COLUMNS: tuple[str, ...] = ("question", "label_position", "rating", "nr_shows", "answered_at")
+"""Last columns of the long answers table."""
+
+RETRIES = 5
+"""Attempts of one database operation before :class:`StorageUnavailableError`."""
+
+
+class StorageUnavailableError(MienError):
+    """The database stayed locked or unreachable after :data:`RETRIES` attempts; nothing was stored."""
+
+
+def now_iso() -> str:
+    """The current UTC time, ISO 8601 with microseconds and ``+00:00``."""
+    return datetime.now(UTC).isoformat()
+
+
+def database_url(url_or_path: str | Path | None, default_path: Path) -> str:
+    """A SQLAlchemy URL from ``--db``: a URL (``postgresql://...``, ``sqlite:///...``) is kept (plain
+    ``postgresql://`` gets the psycopg 3 driver), a file path becomes SQLite, None is ``default_path``."""
+    if url_or_path is None:
+        return f"sqlite:///{Path(default_path).resolve()}"
+    text = str(url_or_path)
+    if "://" not in text:
+        return f"sqlite:///{Path(text).resolve()}"
+    if text.startswith(("postgresql://", "postgres://")):
+        return "postgresql+psycopg://" + text.split("://", 1)[1]
+    if not text.startswith(("sqlite", "postgresql")):
+        raise InvalidValueError("db", text, "a SQLite file path, sqlite:///PATH or postgresql://USER@HOST:PORT/DB")
+    return text
+
+
+@dataclass(frozen=True)
+class ParticipantRecord:
+    """A participant as stored."""
+
+    participant: str
+    """Participant id (from the link ``?participant=ID``)."""
+    ordinal: int
+    """0-based arrival order in the study (picks the Latin-square row)."""
+    started_at: str
+    """First visit, ISO 8601 UTC."""
+    sequence: tuple[str, ...]
+    """Stimulus ids in presentation order."""
+    label_order: tuple[str, ...]
+    """Question keys in on-screen order."""
+    block_order: tuple[int, ...]
+    """Within-subject block indices in the order shown."""
+    consent_at: str | None
+    """When consent was given (None = not yet)."""
+    completed_at: str | None
+    """When the last stimulus was answered (None = not yet)."""
+
+
+def _schema() -> tuple[sa.MetaData, dict[str, sa.Table]]:
+    import sqlalchemy as sa
+
+    meta = sa.MetaData()
+    text = sa.Text
+    tables = {
+        "stimuli": sa.Table(
+            "mien_study_stimuli",
+            meta,
+            sa.Column("study", text, primary_key=True),
+            sa.Column("stimulus", text, primary_key=True),
+            sa.Column("design_index", sa.Integer, nullable=False),
+            sa.Column("protocol", text, nullable=False),
+            sa.Column("expression", text, nullable=False),
+            sa.Column("conditions", text, nullable=False),
+            sa.Column("file", text, nullable=False),
+            sa.Column("sha256", text, nullable=False),
+        ),
+        "participants": sa.Table(
+            "mien_study_participants",
+            meta,
+            sa.Column("study", text, primary_key=True),
+            sa.Column("participant", text, primary_key=True),
+            sa.Column("ordinal", sa.Integer, nullable=False),
+            sa.Column("started_at", text, nullable=False),
+            sa.Column("sequence", text, nullable=False),
+            sa.Column("label_order", text, nullable=False),
+            sa.Column("block_order", text, nullable=False),
+            sa.Column("consent_at", text),
+            sa.Column("completed_at", text),
+        ),
+        "shows": sa.Table(
+            "mien_study_shows",
+            meta,
+            sa.Column("study", text, primary_key=True),
+            sa.Column("participant", text, primary_key=True),
+            sa.Column("stimulus", text, primary_key=True),
+            sa.Column("nr_shows", sa.Integer, nullable=False),
+        ),
+        "answers": sa.Table(
+            "mien_study_answers",
+            meta,
+            sa.Column("study", text, primary_key=True),
+            sa.Column("participant", text, primary_key=True),
+            sa.Column("stimulus", text, primary_key=True),
+            sa.Column("question", text, primary_key=True),
+            sa.Column("position", sa.Integer, nullable=False),
+            sa.Column("label_position", sa.Integer),
+            sa.Column("rating", sa.Integer, nullable=False),
+            sa.Column("nr_shows", sa.Integer, nullable=False),
+            sa.Column("answered_at", text, nullable=False),
+        ),
+    }
+    return meta, tables
+
+
+class Store:
+    """The study database at ``url`` (a SQLAlchemy URL; see :func:`database_url`). Creates its tables.
+
+    Thread-safe (a connection pool); every method is one transaction, retried on a locked or lost
+    database. ``retry_s`` is the first back-off, doubled per attempt.
+    """
+
+    def __init__(self, url: str, retry_s: float = 0.05) -> None:
+        try:
+            import sqlalchemy as sa
+        except ImportError:
+            raise MissingExtraError("sqlalchemy", "study") from None
+        self.url = url
+        self.retry_s = retry_s
+        self._sa = sa
+        self.is_sqlite = url.startswith("sqlite")
+        if self.is_sqlite:
+            from sqlalchemy.dialects.sqlite import insert
+
+            engine = sa.create_engine(url, connect_args={"timeout": 5.0, "check_same_thread": False}, pool_size=20)
+
+            @sa.event.listens_for(engine, "connect")
+            def _pragmas(connection: Any, _record: Any) -> None:
+                cursor = connection.cursor()
+                cursor.execute("PRAGMA journal_mode=WAL")
+                cursor.execute("PRAGMA synchronous=NORMAL")  # WAL + NORMAL: a commit survives a killed process
+                cursor.execute("PRAGMA busy_timeout=5000")
+                cursor.close()
+
+        else:
+            try:
+                from sqlalchemy.dialects.postgresql import insert
+            except ImportError:
+                raise MissingExtraError("psycopg", "study") from None
+            engine = sa.create_engine(url, pool_size=20, max_overflow=20, pool_pre_ping=True)
+        self._insert = insert
+        self.engine = engine
+        self._meta, self.tables = _schema()
+        self._retry(lambda: self._meta.create_all(self.engine))
+
+    def close(self) -> None:
+        """Close every pooled connection."""
+        self.engine.dispose()
+
+    def __enter__(self) -> Store:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def _retry(self, operation: Callable[[], T]) -> T:
+        from sqlalchemy.exc import DBAPIError, OperationalError
+
+        delay = self.retry_s
+        for attempt in range(RETRIES):
+            try:
+                return operation()
+            except (OperationalError, DBAPIError) as error:
+                transient = isinstance(error, OperationalError) or bool(getattr(error, "connection_invalidated", False))
+                if not transient:
+                    raise
+                if attempt == RETRIES - 1:
+                    reason = str(getattr(error, "orig", error)).strip().splitlines()[0]
+                    raise StorageUnavailableError(
+                        f"the study database {self.engine.url.render_as_string(hide_password=True)} is locked or "
+                        f"unreachable after {RETRIES} attempts ({reason}); nothing was stored, try again"
+                    ) from None
+                time.sleep(delay)
+                delay *= 2
+        raise AssertionError("unreachable")
+
+    # ---------------------------------------------------------------- writes
+
+    def register_stimuli(self, study: str, protocol: str, stimuli: Iterable[Mapping[str, Any]]) -> None:
+        """Store the manifest's stimuli (dicts with id, expression, conditions, file, sha256); existing rows
+        of the same id are replaced, so a re-rendered stimulus set updates its hashes."""
+        rows = [
+            {
+                "study": study,
+                "stimulus": s["id"],
+                "design_index": k,
+                "protocol": protocol,
+                "expression": s["expression"],
+                "conditions": json.dumps(s.get("conditions", {}), sort_keys=False),
+                "file": s.get("file", ""),
+                "sha256": s.get("sha256", ""),
+            }
+            for k, s in enumerate(stimuli)
+        ]
+        table = self.tables["stimuli"]
+
+        def write() -> None:
+            with self.engine.begin() as connection:
+                for row in rows:
+                    statement = self._insert(table).values(**row)
+                    update = {k: statement.excluded[k] for k in row if k not in ("study", "stimulus")}
+                    connection.execute(statement.on_conflict_do_update(index_elements=["study", "stimulus"], set_=update))
+
+        self._retry(write)
+
+    def ensure_participant(
+        self, study: str, participant: str, plan: Callable[[int], tuple[Any, Any, Any]]
+    ) -> ParticipantRecord:
+        """The stored participant, created on first arrival with ``plan(ordinal) -> (sequence, label_order,
+        block_order)`` (ordinal = number of participants already in the study). Idempotent."""
+        sa = self._sa
+        table = self.tables["participants"]
+        existing = self.participant(study, participant)
+        if existing is not None:
+            return existing
+
+        def create() -> None:
+            with self.engine.begin() as connection:
+                count = connection.execute(
+                    sa.select(sa.func.count()).select_from(table).where(table.c.study == study)
+                ).scalar_one()
+                sequence, label_order, block_order = plan(int(count))
+                connection.execute(
+                    self._insert(table)
+                    .values(
+                        study=study,
+                        participant=participant,
+                        ordinal=int(count),
+                        started_at=now_iso(),
+                        sequence=json.dumps(list(sequence)),
+                        label_order=json.dumps(list(label_order)),
+                        block_order=json.dumps([int(b) for b in block_order]),
+                    )
+                    .on_conflict_do_nothing()
+                )
+
+        self._retry(create)
+        record = self.participant(study, participant)
+        assert record is not None
+        return record
+
+    def _set_time(self, study: str, participant: str, column: str) -> None:
+        sa = self._sa
+        table = self.tables["participants"]
+
+        def write() -> None:
+            with self.engine.begin() as connection:
+                connection.execute(
+                    sa.update(table)
+                    .where(table.c.study == study, table.c.participant == participant, table.c[column].is_(None))
+                    .values({column: now_iso()})
+                )
+
+        self._retry(write)
+
+    def record_consent(self, study: str, participant: str) -> None:
+        """Mark consent given (the first time only)."""
+        self._set_time(study, participant, "consent_at")
+
+    def record_completed(self, study: str, participant: str) -> None:
+        """Mark the session complete (the first time only)."""
+        self._set_time(study, participant, "completed_at")
+
+    def record_show(self, study: str, participant: str, stimulus: str, nr_shows: int) -> int:
+        """Store that ``stimulus`` has been played ``nr_shows`` times (the client's count, so a repeated
+        request is idempotent); returns the stored count (the larger of the stored and given)."""
+        sa = self._sa
+        table = self.tables["shows"]
+
+        def write() -> int:
+            with self.engine.begin() as connection:
+                statement = self._insert(table).values(
+                    study=study, participant=participant, stimulus=stimulus, nr_shows=int(nr_shows)
+                )
+                connection.execute(
+                    statement.on_conflict_do_update(
+                        index_elements=["study", "participant", "stimulus"],
+                        set_={"nr_shows": sa.func.max(table.c.nr_shows, statement.excluded.nr_shows)}
+                        if self.is_sqlite
+                        else {"nr_shows": sa.func.greatest(table.c.nr_shows, statement.excluded.nr_shows)},
+                    )
+                )
+                return int(
+                    connection.execute(
+                        sa.select(table.c.nr_shows).where(
+                            table.c.study == study, table.c.participant == participant, table.c.stimulus == stimulus
+                        )
+                    ).scalar_one()
+                )
+
+        return self._retry(write)
+
+    def record_answer(
+        self,
+        study: str,
+        participant: str,
+        stimulus: str,
+        position: int,
+        ratings: Mapping[str, int],
+        label_positions: Mapping[str, int],
+        nr_shows: int,
+    ) -> int:
+        """Store one stimulus's ratings (question -> int) in one transaction; returns how many rows were new
+        (0 for a repeated submit: ``ON CONFLICT DO NOTHING`` on (study, participant, stimulus, question))."""
+        table = self.tables["answers"]
+        answered_at = now_iso()
+        rows = [
+            {
+                "study": study,
+                "participant": participant,
+                "stimulus": stimulus,
+                "question": question,
+                "position": int(position),
+                "label_position": label_positions.get(question),
+                "rating": int(rating),
+                "nr_shows": int(nr_shows),
+                "answered_at": answered_at,
+            }
+            for question, rating in ratings.items()
+        ]
+
+        def write() -> int:
+            with self.engine.begin() as connection:
+                result = connection.execute(self._insert(table).on_conflict_do_nothing(), rows)
+                return max(0, int(result.rowcount or 0))
+
+        return self._retry(write)
+
+    # ---------------------------------------------------------------- reads
+
+    def participant(self, study: str, participant: str) -> ParticipantRecord | None:
+        """The stored participant, or None."""
+        sa = self._sa
+        table = self.tables["participants"]
+
+        def read() -> Any:
+            with self.engine.connect() as connection:
+                return connection.execute(
+                    sa.select(table).where(table.c.study == study, table.c.participant == participant)
+                ).first()
+
+        row = self._retry(read)
+        if row is None:
+            return None
+        return ParticipantRecord(
+            participant=row.participant,
+            ordinal=int(row.ordinal),
+            started_at=row.started_at,
+            sequence=tuple(json.loads(row.sequence)),
+            label_order=tuple(json.loads(row.label_order)),
+            block_order=tuple(json.loads(row.block_order)),
+            consent_at=row.consent_at,
+            completed_at=row.completed_at,
+        )
+
+    def progress(self, study: str, participant: str) -> tuple[set[str], dict[str, int]]:
+        """(stimulus ids with at least one stored answer, stimulus -> stored nrShows) of a participant."""
+        sa = self._sa
+        answers, shows = self.tables["answers"], self.tables["shows"]
+
+        def read() -> tuple[set[str], dict[str, int]]:
+            with self.engine.connect() as connection:
+                done = connection.execute(
+                    sa.select(answers.c.stimulus)
+                    .where(answers.c.study == study, answers.c.participant == participant)
+                    .distinct()
+                ).scalars()
+                counts = connection.execute(
+                    sa.select(shows.c.stimulus, shows.c.nr_shows).where(
+                        shows.c.study == study, shows.c.participant == participant
+                    )
+                )
+                return set(done), {s: int(n) for s, n in counts}
+
+        return self._retry(read)
+
+    def count_answers(self, study: str | None = None) -> int:
+        """Number of stored answer rows (of ``study``, or all)."""
+        sa = self._sa
+        table = self.tables["answers"]
+        query = sa.select(sa.func.count()).select_from(table)
+        if study is not None:
+            query = query.where(table.c.study == study)
+
+        def read() -> int:
+            with self.engine.connect() as connection:
+                return int(connection.execute(query).scalar_one())
+
+        return self._retry(read)
+
+    def studies(self) -> tuple[str, ...]:
+        """Names of the studies with registered stimuli."""
+        sa = self._sa
+        table = self.tables["stimuli"]
+
+        def read() -> tuple[str, ...]:
+            with self.engine.connect() as connection:
+                return tuple(connection.execute(sa.select(table.c.study).distinct().order_by(table.c.study)).scalars())
+
+        return self._retry(read)
+
+    def answers_frame(self, study: str | None = None) -> pd.DataFrame:
+        """The long answers table (one row per answered question), columns in the contract order:
+        :data:`ANSWER_COLUMNS`, the design factors present in the stimuli's conditions (``head, identity,
+        basis, view, distance_m, intensity`` or ``laughter_type, description``; '' when not applicable),
+        then :data:`TAIL_COLUMNS`. ``rating``, ``nr_shows`` and ``position`` are ints, ``label_position`` a
+        nullable Int64. Rows sorted by study, participant, position and on-screen question order."""
+        import pandas as pd
+
+        from mien.study.design import BROEKENS_FACTORS, MASCARO_FACTORS
+
+        sa = self._sa
+        answers, stimuli, participants = self.tables["answers"], self.tables["stimuli"], self.tables["participants"]
+        query = (
+            sa.select(
+                answers.c.study,
+                answers.c.participant,
+                participants.c.started_at.label("session_started_at"),
+                answers.c.position,
+                answers.c.stimulus,
+                stimuli.c.protocol,
+                stimuli.c.expression,
+                stimuli.c.conditions,
+                answers.c.question,
+                answers.c.label_position,
+                answers.c.rating,
+                answers.c.nr_shows,
+                answers.c.answered_at,
+            )
+            .select_from(answers)
+            .join(stimuli, sa.and_(stimuli.c.study == answers.c.study, stimuli.c.stimulus == answers.c.stimulus))
+            .join(
+                participants,
+                sa.and_(participants.c.study == answers.c.study, participants.c.participant == answers.c.participant),
+            )
+        )
+        if study is not None:
+            query = query.where(answers.c.study == study)
+
+        def read() -> list[Any]:
+            with self.engine.connect() as connection:
+                return list(connection.execute(query))
+
+        rows = self._retry(read)
+        conditions = [json.loads(r.conditions) for r in rows]
+        present = {key for c in conditions for key in c}
+        factors = [f for f in (*BROEKENS_FACTORS, *MASCARO_FACTORS) if f in present]
+        factors += sorted(present - set(factors))
+        records = []
+        for r, c in zip(rows, conditions, strict=True):
+            record = {name: getattr(r, name) for name in ANSWER_COLUMNS}
+            record.update({f: c.get(f, "") for f in factors})
+            record.update({name: getattr(r, name) for name in TAIL_COLUMNS})
+            records.append(record)
+        columns = [*ANSWER_COLUMNS, *factors, *TAIL_COLUMNS]
+        frame = pd.DataFrame.from_records(records, columns=columns)
+        for name in ("position", "rating", "nr_shows"):
+            frame[name] = frame[name].astype("int64")
+        frame["label_position"] = frame["label_position"].astype("Int64")
+        label_rank = frame["label_position"].fillna(10_000)
+        frame = (
+            frame.assign(_rank=label_rank)
+            .sort_values(["study", "participant", "position", "_rank", "question"], kind="stable")
+            .drop(columns="_rank")
+            .reset_index(drop=True)
+        )
+        return frame
