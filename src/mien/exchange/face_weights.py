@@ -1,0 +1,79 @@
+"""Between clips and a rig's morph-target weights: the one conversion every geometry format uses.
+
+A clip reaches a rig in one of two vocabularies: face channels (AU intensities 0..5 and pose degrees,
+:data:`~mien.facs.catalogue.FACE_CHANNELS`), sent through the AU -> ARKit mapping by
+:func:`mien.animate.face_to_rig`; or the rig's own target names (weights 0..1, e.g. the 52 ARKit names), plus
+optional pose channels, used as they are. The way back, ARKit weights -> AU intensities, is the NNLS solve of
+:class:`mien.validate.au_solve.AUSolver`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mien.errors import InvalidValueError
+from mien.facs.catalogue import FACE_CHANNELS, POSE_CHANNELS
+from mien.facs.clip import Clip
+from mien.rig.arkit import ARKIT_NAMES
+from mien.rig.model import Rig
+
+__all__ = ["clip_to_rig", "is_weight_clip", "weights_to_au"]
+
+
+def is_weight_clip(clip: Clip, target_names: tuple[str, ...]) -> bool:
+    """True when every channel of ``clip`` is a target name or a pose channel (and at least one is a target)."""
+    names = set(target_names)
+    return any(c in names for c in clip.channels) and all(c in names or c in POSE_CHANNELS for c in clip.channels)
+
+
+def clip_to_rig(clip: Clip, rig: Rig) -> tuple[np.ndarray, np.ndarray]:
+    """``(weights (n, n_targets) float32, poses (n, 5) float64 degrees)`` of ``clip`` on ``rig``.
+
+    Weight clips (channels named after ``rig``'s targets) are used as they are; face-channel clips go through
+    the AU mapping; anything else raises naming the first channel that is neither.
+    """
+    if is_weight_clip(clip, rig.target_names):
+        weights = np.zeros((clip.n_frames, len(rig.targets)), np.float32)
+        poses = np.zeros((clip.n_frames, len(POSE_CHANNELS)))
+        for j, name in enumerate(clip.channels):
+            if name in POSE_CHANNELS:
+                poses[:, POSE_CHANNELS.index(name)] = clip.values[:, j]
+            else:
+                weights[:, rig.target_index(name)] = clip.values[:, j]
+        return weights, poses
+    unknown = [c for c in clip.channels if c not in FACE_CHANNELS]
+    if unknown:
+        raise InvalidValueError(
+            "clip channel",
+            unknown[0],
+            f"face channels (AU1L, AU12R, head_yaw_deg...) or target names of head {rig.name!r} (eyeBlinkLeft...)",
+        )
+    from mien.animate import face_to_rig
+
+    weights, poses = face_to_rig(rig, clip)
+    return np.asarray(weights, np.float32), np.asarray(poses, np.float64)
+
+
+def weights_to_au(clip: Clip) -> Clip:
+    """A face-channel clip (AU intensities 0..5, pose degrees) from an ARKit weight clip, by NNLS.
+
+    ``clip`` channels: ARKit names (weights 0..1; missing ones count as 0) and optional pose channels, which
+    are kept. AUs the solver does not estimate stay 0.
+    """
+    from mien.validate.au_solve import AUSolver
+
+    unknown = [c for c in clip.channels if c not in ARKIT_NAMES and c not in POSE_CHANNELS]
+    if unknown:
+        raise InvalidValueError("clip channel", unknown[0], "ARKit blendshape names or pose channels")
+    scores = np.zeros((clip.n_frames, len(ARKIT_NAMES)))
+    for j, name in enumerate(clip.channels):
+        if name in ARKIT_NAMES:
+            scores[:, ARKIT_NAMES.index(name)] = clip.values[:, j]
+    solver = AUSolver()
+    values = np.zeros((clip.n_frames, len(FACE_CHANNELS)))
+    if clip.n_frames:
+        values[:, solver.channels] = solver.solve_channels(scores)
+    for j, name in enumerate(clip.channels):
+        if name in POSE_CHANNELS:
+            values[:, FACE_CHANNELS.index(name)] = clip.values[:, j]
+    return Clip(values, clip.fps, FACE_CHANNELS)

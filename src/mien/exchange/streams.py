@@ -1,0 +1,85 @@
+"""Where format modules read from and write to: a path or an open binary stream, one way for every format.
+
+A *source* is a path (``str`` or :class:`os.PathLike`) or a binary stream with ``read()``; a *target* is a path or
+a binary stream with ``write()``. Writing to a path is atomic (a temporary file in the same folder, then a
+rename), so a reader never sees half a file and a failed write leaves the old file in place.
+
+>>> import io
+>>> buffer = io.BytesIO()
+>>> write_bytes(b"abc", buffer) is None, buffer.getvalue()
+(True, b'abc')
+>>> read_bytes(io.BytesIO(b"xyz"))
+b'xyz'
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+from typing import IO, Union
+
+from mien.errors import InvalidValueError, MissingAssetError
+
+__all__ = ["Source", "Target", "read_bytes", "read_text", "source_name", "write_bytes", "write_text"]
+
+Source = Union[str, "os.PathLike[str]", IO[bytes]]
+"""A path or a readable binary stream."""
+
+Target = Union[str, "os.PathLike[str]", IO[bytes]]
+"""A path or a writable binary stream."""
+
+
+def source_name(source: Source | Target) -> str:
+    """A name for messages: the file name of a path, the stream's ``name`` or ``"<stream>"``."""
+    if isinstance(source, (str, os.PathLike)):
+        return Path(source).name
+    name = getattr(source, "name", None)
+    return Path(name).name if isinstance(name, str) else "<stream>"
+
+
+def read_bytes(source: Source) -> bytes:
+    """All bytes of ``source``; a missing file raises :class:`MissingAssetError` naming it."""
+    if isinstance(source, (str, os.PathLike)):
+        path = Path(source)
+        if not path.is_file():
+            raise MissingAssetError(f"{path}: no such file; check the path")
+        return path.read_bytes()
+    data = source.read()
+    if not isinstance(data, bytes):
+        raise InvalidValueError("source", type(source).__name__, "a path or a binary stream (open(..., 'rb'))")
+    return data
+
+
+def read_text(source: Source) -> str:
+    """``source`` decoded as UTF-8 (a byte-order mark is dropped); bad bytes raise naming the file."""
+    data = read_bytes(source)
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        where = f"{source_name(source)} byte {exc.start}"
+        raise InvalidValueError(where, data[exc.start : exc.start + 4], "UTF-8 text") from None
+
+
+def write_bytes(data: bytes, target: Target) -> Path | None:
+    """Write ``data`` to ``target``: atomically to a path (returned), or into a stream (returns None)."""
+    if not isinstance(target, (str, os.PathLike)):
+        target.write(data)
+        return None
+    path = Path(target)
+    if path.parent and not path.parent.is_dir():
+        raise InvalidValueError("output", str(path), "a path in an existing folder")
+    handle, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(handle, "wb") as stream:
+            stream.write(data)
+        os.replace(temporary, path)
+    except BaseException:
+        Path(temporary).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def write_text(text: str, target: Target) -> Path | None:
+    """Write ``text`` as UTF-8 to ``target`` (see :func:`write_bytes`)."""
+    return write_bytes(text.encode("utf-8"), target)
