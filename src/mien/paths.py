@@ -1,7 +1,9 @@
 """Where mien finds its assets and keeps its caches.
 
 Assets are never bundled: each is found by, in order, an explicit path argument, an environment variable,
-or the ``[assets]`` table of the user config file (``$MIEN_CONFIG`` or ``~/.config/mien/config.toml``).
+the ``[assets]`` table of the user config file (``$MIEN_CONFIG`` or ``~/.config/mien/config.toml``), or the
+folder ``mien assets fetch`` installs into (:func:`installed_path`: ``data_dir() / INSTALL_FOLDERS[name]``,
+with ``data_dir()`` = ``$MIEN_DATA_DIR`` or ``$XDG_DATA_HOME/mien`` or ``~/.local/share/mien``).
 
 =================  ==========================  ==========================================================
 asset              environment variable        what it is
@@ -20,13 +22,22 @@ from pathlib import Path
 
 from mien.errors import InvalidValueError, MissingAssetError, UnknownNameError
 
-__all__ = ["ASSETS", "asset_path", "cache_dir", "config_path", "require_asset"]
+__all__ = [
+    "ASSETS",
+    "INSTALL_FOLDERS",
+    "asset_path",
+    "cache_dir",
+    "config_path",
+    "data_dir",
+    "installed_path",
+    "require_asset",
+]
 
 ASSETS: dict[str, tuple[str, str]] = {
     "ict_facekit": (
         "MIEN_ICT_FACEKIT",
-        "ICT-FaceKit (MIT): clone https://github.com/ICT-VGL/ICT-FaceKit and point MIEN_ICT_FACEKIT at the "
-        "folder that holds FaceXModel/",
+        "ICT-FaceKit (MIT): run `mien assets fetch ict-facekit`, or clone https://github.com/ICT-VGL/ICT-FaceKit "
+        "and point MIEN_ICT_FACEKIT at the folder that holds FaceXModel/",
     ),
     "face_landmarker": (
         "MIEN_FACE_LANDMARKER",
@@ -41,6 +52,26 @@ ASSETS: dict[str, tuple[str, str]] = {
     ),
 }
 """Known assets: name -> (environment variable, how to get it)."""
+
+
+INSTALL_FOLDERS: dict[str, str] = {"ict_facekit": "ict-facekit"}
+"""Assets ``mien assets fetch`` can install: name -> folder under :func:`data_dir`."""
+
+
+def data_dir() -> Path:
+    """The user data folder (``$MIEN_DATA_DIR``, ``$XDG_DATA_HOME/mien`` or ``~/.local/share/mien``); may not exist."""
+    explicit = os.environ.get("MIEN_DATA_DIR")
+    if explicit:
+        return Path(explicit).expanduser()
+    xdg = os.environ.get("XDG_DATA_HOME")
+    return (Path(xdg).expanduser() if xdg else Path.home() / ".local" / "share") / "mien"
+
+
+def installed_path(name: str) -> Path:
+    """Where ``mien assets fetch`` installs asset ``name`` (whether or not it is there)."""
+    if name not in INSTALL_FOLDERS:
+        raise UnknownNameError("fetchable asset", name, tuple(INSTALL_FOLDERS))
+    return data_dir() / INSTALL_FOLDERS[name]
 
 
 def config_path() -> Path:
@@ -64,6 +95,8 @@ def _from_config(name: str) -> str | None:
 def asset_path(name: str, explicit: str | os.PathLike[str] | None = None) -> Path | None:
     """Resolve asset ``name`` (see :data:`ASSETS`) to a path, or ``None`` when nothing points at it.
 
+    Order: ``explicit``, the environment variable, the config file, then the installed folder if present.
+
     The path is returned whether or not it exists; :func:`require_asset` checks.
     """
     if name not in ASSETS:
@@ -72,7 +105,11 @@ def asset_path(name: str, explicit: str | os.PathLike[str] | None = None) -> Pat
         return Path(explicit).expanduser()
     env_var, _ = ASSETS[name]
     value = os.environ.get(env_var) or _from_config(name)
-    return Path(value).expanduser() if value else None
+    if value:
+        return Path(value).expanduser()
+    if name in INSTALL_FOLDERS and installed_path(name).exists():
+        return installed_path(name)
+    return None
 
 
 def require_asset(name: str, explicit: str | os.PathLike[str] | None = None) -> Path:

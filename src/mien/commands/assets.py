@@ -1,12 +1,17 @@
-"""``mien assets``: report which assets (heads, models) are configured and found, and how to install the rest.
+"""``mien assets``: report which assets (heads, models) are configured and found, and how to install the rest;
+``mien assets fetch NAME``: download one from its public home, check its hash and install it.
 
-Always exits 0: it is a report, not a check.
+The report always exits 0: it is a report, not a check. ``fetch`` exits 2, installing nothing, when the
+download fails or its SHA-256 does not match.
 """
 
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 from typing import Any
+
+from mien.commands._checks import positive_seconds
 
 
 def register(subparsers: Any) -> None:
@@ -19,6 +24,24 @@ def register(subparsers: Any) -> None:
     )
     parser.add_argument("--json", action="store_true", help="print a machine-readable JSON report")
     parser.set_defaults(handler=run)
+    sub = parser.add_subparsers(dest="assets_command", metavar="ACTION")
+    fetch = sub.add_parser(
+        "fetch",
+        help="download an asset from its public home, check its SHA-256 and install it where mien looks",
+        description="Download NAME (ict-facekit: the MIT ICT-FaceKit head, GitHub's zip of "
+        "https://github.com/ICT-VGL/ICT-FaceKit), check the archive's SHA-256, unpack it into a temporary "
+        "folder and rename it into place (default: the user data folder, $MIEN_DATA_DIR or "
+        "~/.local/share/mien, where mien looks when no variable or config entry points elsewhere). A failed "
+        "or mismatching download installs nothing.",
+    )
+    fetch.add_argument("name", help="asset to fetch: ict-facekit")
+    fetch.add_argument("--url", help="download from this URL instead (a mirror, or a zip of a pinned commit)")
+    fetch.add_argument("--sha256", metavar="HEX", help="the SHA-256 the archive must have (64 hex digits)")
+    fetch.add_argument("--dest", type=Path, metavar="DIR", help="install into this folder (it must not exist yet)")
+    fetch.add_argument("--force", action="store_true", help="replace an existing install at the destination")
+    fetch.add_argument("--timeout", type=positive_seconds, default=30.0, help="network timeout, seconds (default 30)")
+    fetch.add_argument("--quiet", action="store_true", help="no progress bar")
+    fetch.set_defaults(handler=run_fetch)
 
 
 def _report() -> dict[str, Any]:
@@ -26,12 +49,16 @@ def _report() -> dict[str, Any]:
     import os
 
     from mien.errors import MienError
-    from mien.paths import ASSETS, asset_path, config_path
+    from mien.paths import ASSETS, INSTALL_FOLDERS, asset_path, config_path, installed_path
 
     entries = []
     for name, (env_var, how) in ASSETS.items():
         path = asset_path(name)
-        source = "environment" if os.environ.get(env_var) else ("config" if path is not None else None)
+        source = None
+        if os.environ.get(env_var):
+            source = "environment"
+        elif path is not None:
+            source = "installed" if name in INSTALL_FOLDERS and path == installed_path(name) else "config"
         entry: dict[str, Any] = {
             "name": name,
             "env_var": env_var,
@@ -94,4 +121,36 @@ def run(args: argparse.Namespace) -> int:
 
     report = _report()
     print(json.dumps(report, indent=2) if args.json else _text(report))
+    return 0
+
+
+def run_fetch(args: argparse.Namespace) -> int:
+    """Download, verify and install ``args.name``; print the install path. Exit 2 (nothing installed) on failure."""
+    from mien.assets.fetch import SOURCES, fetch_asset
+    from mien.errors import UnknownNameError
+
+    name = args.name.replace("_", "-").lower()
+    if name not in SOURCES:
+        raise UnknownNameError("fetchable asset", args.name, tuple(SOURCES))
+    verify = None
+    if SOURCES[name].asset == "ict_facekit":
+        from mien.rig.ict_facekit import ict_missing_files
+
+        verify = ict_missing_files
+    path = fetch_asset(
+        name,
+        args.url,
+        args.sha256,
+        args.dest,
+        force=args.force,
+        show_progress=not args.quiet,
+        timeout_s=args.timeout,
+        verify=verify,
+    )
+    print(f"installed {name} ({SOURCES[name].licence} licence) in {path}")
+    if args.dest is not None:
+        from mien.paths import ASSETS
+
+        env_var = ASSETS[SOURCES[name].asset][0]
+        print(f"mien looks in the default folder only; point {env_var} at {path} to use this one")
     return 0

@@ -35,9 +35,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from mien.character import Character
-    from mien.facs.intensity import parse_au
-
     from mien.facs.catalogue import FACE_CHANNELS
+    from mien.facs.intensity import parse_au
 
     specs = [parse_au(text) for text in args.aus]  # all validated before anything runs
     check_curve_request(args.duration, args.fps, len(FACE_CHANNELS))

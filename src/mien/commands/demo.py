@@ -73,13 +73,12 @@ def run(args: argparse.Namespace) -> int:
 
     from mien.animate import face_to_rig
     from mien.exchange.curves_csv import write as write_csv
+    from mien.facs.catalogue import FACE_CHANNELS
     from mien.plot import plot_clip
     from mien.progress import progress
     from mien.render.clip_render import iter_frames, make_renderer
     from mien.render.contact_sheet import contact_sheet
     from mien.render.video import Mp4Writer, write_png
-
-    from mien.facs.catalogue import FACE_CHANNELS
 
     out: Path = args.out
     # curves, plus per-frame rig weights and poses (frames themselves are streamed, one at a time)

@@ -31,7 +31,6 @@ def run(args: argparse.Namespace) -> int:
     from mien.affect.emotions import resolve_emotion
     from mien.affect.envelope import Envelope
     from mien.character import Character
-
     from mien.facs.catalogue import FACE_CHANNELS
 
     name = resolve_emotion(args.emotion)

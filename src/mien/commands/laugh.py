@@ -57,12 +57,11 @@ def run(args: argparse.Namespace) -> int:
     if not args.type:
         raise InvalidValueError("type", None, "a laugh type (mien laugh --list shows them)")
 
+    from mien.commands._checks import check_curve_request
     from mien.exchange import writer_for
+    from mien.facs.catalogue import FACE_CHANNELS
     from mien.laughter.generator import generate
     from mien.laughter.library import load_library
-
-    from mien.commands._checks import check_curve_request
-    from mien.facs.catalogue import FACE_CHANNELS
     from mien.laughter.names import CONTROLLER_NAMES
 
     if args.duration is not None:
