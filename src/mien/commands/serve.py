@@ -1,0 +1,93 @@
+"""``mien serve``: the live server (OpenFACS UDP, WebSocket frames, HTTP API) until Ctrl-C."""
+
+from __future__ import annotations
+
+import argparse
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "serve",
+        help="serve live faces: OpenFACS UDP API, WebSocket frames, HTTP API",
+        description="Run the live server: a drop-in OpenFACS UDP endpoint (port 5000), a WebSocket stream of "
+        "binary frames (/ws) and an HTTP API with an OpenAPI description (/docs, /openapi.json). "
+        "Beyond loopback, HTTP and WebSocket need an access token (printed at start).",
+    )
+    parser.add_argument("--host", default="127.0.0.1", help="address of every endpoint (default %(default)s)")
+    parser.add_argument("--udp-port", type=int, default=5000, help="OpenFACS UDP port (default %(default)s)")
+    parser.add_argument("--http-port", type=int, default=8000, help="HTTP + WebSocket port (default %(default)s)")
+    parser.add_argument("--tick-hz", type=float, default=60.0, help="clock rate in Hz (default %(default)s)")
+    parser.add_argument("--token", help="access token (default: none on loopback, generated beyond)")
+    parser.add_argument(
+        "--character",
+        action="append",
+        metavar="ID",
+        help="character id to create at start (repeatable; default: one called 'default')",
+    )
+    parser.add_argument("--head", default="default", help="head of those characters: default, builtin, ict")
+    parser.add_argument("--identity", help="identity preset of the head")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the first character (others: +1 each)")
+    parser.add_argument("--no-idle", action="store_true", help="switch idle behaviour off")
+    parser.add_argument("--check", action="store_true", help="start, print the addresses, then stop (a smoke test)")
+    parser.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    import asyncio
+    import logging
+    import math
+
+    from mien.errors import InvalidValueError, MienError
+    from mien.rig.heads import HEADS
+
+    if args.head not in HEADS:
+        raise InvalidValueError("--head", args.head, f"one of {', '.join(HEADS)}")
+    if not (math.isfinite(args.tick_hz) and 1.0 <= args.tick_hz <= 1000.0):
+        raise InvalidValueError("--tick-hz", args.tick_hz, "a clock rate between 1 and 1000 Hz")
+    for option, port in (("--udp-port", args.udp_port), ("--http-port", args.http_port)):
+        if not 0 <= port <= 65535:
+            raise InvalidValueError(option, port, "a port 0..65535 (0 = any free port)")
+    if args.udp_port and args.udp_port == args.http_port:
+        raise InvalidValueError("--http-port", args.http_port, "a port other than --udp-port")
+    try:
+        from mien.server.app import LiveServer, ServeConfig, is_loopback
+        from mien.server.registry import CharacterSpec
+    except ImportError as exc:
+        from mien.errors import MissingExtraError
+
+        raise MissingExtraError(exc.name or "fastapi", "serve") from None
+    ids = args.character or ["default"]
+    specs = tuple(
+        CharacterSpec(character_id, head=args.head, identity=args.identity, seed=args.seed + i, idle=not args.no_idle)
+        for i, character_id in enumerate(ids)
+    )
+    config = ServeConfig(args.host, args.udp_port, args.http_port, args.tick_hz, args.token, specs)
+    logging.basicConfig(level=logging.WARNING, format="%(asctime)s %(name)s %(levelname)s: %(message)s")
+    server = LiveServer(config)
+
+    async def main() -> None:
+        try:
+            await server.start()
+        except OSError as exc:
+            raise MienError(
+                f"cannot listen on {args.host} (UDP {args.udp_port}, HTTP {args.http_port}): {exc.strerror or exc}; "
+                "pick other ports with --udp-port/--http-port (0 = any free port) or stop the other server"
+            ) from None
+        host = f"[{args.host}]" if ":" in args.host else args.host
+        query = f"?token={server.token}" if server.token else ""
+        print(f"mien serve: OpenFACS UDP on {host}:{server.udp_port}", flush=True)
+        print(f"mien serve: HTTP on http://{host}:{server.http_port}/{query} (API docs: /docs)", flush=True)
+        print(f"mien serve: WebSocket frames on ws://{host}:{server.http_port}/ws{query}", flush=True)
+        print(f"mien serve: characters {', '.join(ids)} at {args.tick_hz:g} Hz; Ctrl-C stops", flush=True)
+        if not is_loopback(args.host):
+            print(f"mien serve: WARNING: listening beyond loopback; access token: {server.token}", flush=True)
+        try:
+            if args.check:
+                await asyncio.sleep(0.5)
+            else:
+                await asyncio.Event().wait()
+        finally:
+            await server.stop()
+
+    asyncio.run(main())
+    return 0

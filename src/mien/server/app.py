@@ -1,0 +1,225 @@
+"""``mien serve``: one asyncio loop running the clock, the OpenFACS UDP endpoint and uvicorn (HTTP + WebSocket).
+
+>>> config = ServeConfig(udp_port=0, http_port=0, characters=(CharacterSpec("a", head="builtin"),))
+>>> with ServerThread(config) as server:
+...     server.udp_port > 0 and server.http_port > 0
+True
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import ipaddress
+import logging
+import secrets
+import socket
+import threading
+import time
+from dataclasses import dataclass
+from typing import Any
+
+from mien.errors import InvalidValueError
+from mien.server.registry import CharacterSpec, Registry
+from mien.server.scheduler import Clock
+from mien.server.websocket import Hub
+
+__all__ = ["LiveServer", "ServeConfig", "ServerThread", "is_loopback", "serve"]
+
+log = logging.getLogger("mien.server")
+
+
+def is_loopback(host: str) -> bool:
+    """True for ``localhost`` and loopback addresses (127.0.0.0/8, ::1).
+
+    >>> is_loopback("127.0.0.1"), is_loopback("0.0.0.0")
+    (True, False)
+    """
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+@dataclass(frozen=True)
+class ServeConfig:
+    """How to run a server."""
+
+    host: str = "127.0.0.1"
+    """Address of every endpoint (beyond loopback an access token is required)."""
+    udp_port: int = 5000
+    """OpenFACS UDP port (0 = any free port)."""
+    http_port: int = 8000
+    """HTTP + WebSocket port (0 = any free port)."""
+    tick_hz: float = 60.0
+    """Clock rate, ticks per second."""
+    token: str | None = None
+    """Access token; None = none on loopback, a generated one beyond."""
+    characters: tuple[CharacterSpec, ...] = (CharacterSpec("default"),)
+    """Characters at start (the first is the default target of messages)."""
+
+    def __post_init__(self) -> None:
+        for name in ("udp_port", "http_port"):
+            port = getattr(self, name)
+            if not isinstance(port, int) or not 0 <= port <= 65535:
+                raise InvalidValueError(name, port, "a port 0..65535 (0 = any free port)")
+        if self.token is not None and len(self.token) < 8:
+            raise InvalidValueError("token", "***", "a token of at least 8 characters")
+        ids = [spec.id for spec in self.characters]
+        if len(set(ids)) != len(ids):
+            raise InvalidValueError("characters", ids, "distinct character ids")
+
+
+class LiveServer:
+    """The running parts: registry, clock, WebSocket hub, UDP transport, uvicorn server."""
+
+    def __init__(self, config: ServeConfig) -> None:
+        self.config = config
+        """How it was started."""
+        self.registry = Registry()
+        """The characters."""
+        self.clock = Clock(self.registry, config.tick_hz)
+        """The fixed-rate clock."""
+        self.hub = Hub(self.registry)
+        """The WebSocket viewers."""
+        self.clock.listeners.append(self.hub.on_tick)
+        self.token: str | None = config.token
+        """Access token for HTTP and WebSocket, or None."""
+        if self.token is None and not is_loopback(config.host):
+            self.token = secrets.token_urlsafe(18)
+        self.udp_port = 0
+        """Bound UDP port."""
+        self.http_port = 0
+        """Bound HTTP port."""
+        self.started_monotonic = time.monotonic()
+        """``time.monotonic()`` at start."""
+        self._tasks: list[asyncio.Task[Any]] = []
+        self._udp: asyncio.DatagramTransport | None = None
+        self._uvicorn: Any = None
+
+    async def start(self) -> None:
+        """Create the characters, bind the sockets and start the clock and uvicorn."""
+        import uvicorn
+
+        from mien.server.http_api import create_app
+        from mien.server.udp import open_udp
+
+        for spec in self.config.characters:
+            self.registry.add(spec)
+        host = self.config.host
+        self._udp, self.udp_port = await open_udp(self.registry, host, self.config.udp_port)
+        sock = socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET, socket.SOCK_STREAM)
+        try:
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            sock.bind((host, self.config.http_port))
+        except OSError:
+            sock.close()
+            self._udp.close()
+            raise
+        self.http_port = int(sock.getsockname()[1])
+        app = create_app(self)
+        config = uvicorn.Config(app, log_level="warning", lifespan="off", ws="websockets-sansio", access_log=False)
+        self._uvicorn = uvicorn.Server(config)
+        self.started_monotonic = time.monotonic()
+        self._tasks = [
+            asyncio.create_task(self.clock.run(), name="mien-clock"),
+            asyncio.create_task(self._uvicorn.serve(sockets=[sock]), name="mien-http"),
+        ]
+        for _ in range(500):  # bounded: 5 s
+            if self._uvicorn.started or self._tasks[1].done():
+                break
+            await asyncio.sleep(0.01)
+        if self._tasks[1].done():
+            self._tasks[1].result()  # raise the start error
+        if not is_loopback(host):
+            log.warning(
+                "mien serve listens on %s beyond loopback: HTTP and WebSocket need the access token "
+                "(Authorization: Bearer TOKEN or ?token=TOKEN); UDP has no authentication",
+                host,
+            )
+
+    async def stop(self) -> None:
+        """Stop uvicorn, the clock and the UDP endpoint."""
+        if self._uvicorn is not None:
+            self._uvicorn.should_exit = True
+        if self._udp is not None:
+            self._udp.close()
+        if self._tasks:
+            with contextlib.suppress(asyncio.TimeoutError):
+                await asyncio.wait_for(asyncio.shield(self._tasks[1]), 5.0)
+            for task in self._tasks:
+                task.cancel()
+            await asyncio.gather(*self._tasks, return_exceptions=True)
+
+    async def run_forever(self) -> None:
+        """Start, then wait until cancelled (Ctrl-C), then stop."""
+        await self.start()
+        try:
+            await asyncio.gather(*self._tasks)
+        finally:
+            await self.stop()
+
+
+def serve(config: ServeConfig) -> None:
+    """Run a server in this thread until Ctrl-C."""
+    asyncio.run(LiveServer(config).run_forever())
+
+
+class ServerThread:
+    """A :class:`LiveServer` on its own event loop in a background thread (for tests, benchmarks, notebooks).
+
+    Use as a context manager; :attr:`udp_port`, :attr:`http_port` and :attr:`server` are set once entered.
+    :meth:`call` runs a function on the server's loop (the registry is not thread-safe).
+    """
+
+    def __init__(self, config: ServeConfig) -> None:
+        self.config = config
+        self.server = LiveServer(config)
+        """The server (touch it only through :meth:`call`)."""
+        self.loop = asyncio.new_event_loop()
+        self._thread = threading.Thread(target=self.loop.run_forever, name="mien-server", daemon=True)
+
+    @property
+    def udp_port(self) -> int:
+        """Bound UDP port."""
+        return self.server.udp_port
+
+    @property
+    def http_port(self) -> int:
+        """Bound HTTP port."""
+        return self.server.http_port
+
+    @property
+    def base_url(self) -> str:
+        """``http://host:port``."""
+        return f"http://{self.config.host}:{self.http_port}"
+
+    def call(self, function: Any, *args: Any) -> Any:
+        """Run ``function(*args)`` on the server's loop and return its result (5 s limit)."""
+
+        async def run() -> Any:
+            return function(*args)
+
+        return asyncio.run_coroutine_threadsafe(run(), self.loop).result(5.0)
+
+    def __enter__(self) -> ServerThread:
+        self._thread.start()
+        try:
+            asyncio.run_coroutine_threadsafe(self.server.start(), self.loop).result(30.0)
+        except BaseException:
+            self._shutdown()
+            raise
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        with contextlib.suppress(Exception):
+            asyncio.run_coroutine_threadsafe(self.server.stop(), self.loop).result(10.0)
+        self._shutdown()
+
+    def _shutdown(self) -> None:
+        self.loop.call_soon_threadsafe(self.loop.stop)
+        self._thread.join(5.0)
+        if not self._thread.is_alive():
+            self.loop.close()

@@ -1,0 +1,353 @@
+"""The HTTP API (FastAPI; its OpenAPI description is at ``/openapi.json``) and the ``/ws`` route.
+
+Every command goes through the same parser as UDP and WebSocket messages
+(:func:`mien.server.protocol.parse_message`), so the three transports accept exactly the same things.
+"""
+
+from __future__ import annotations
+
+import secrets
+import time
+from typing import TYPE_CHECKING, Any
+
+from fastapi import Depends, FastAPI, HTTPException, Query, Request, Response, WebSocket, status
+from fastapi.responses import JSONResponse
+from pydantic import BaseModel, Field
+
+from mien.errors import MienError, UnknownNameError
+from mien.server.protocol import MessageRejected, frame_bytes, parse_message
+from mien.server.registry import CharacterSpec, Entry
+
+if TYPE_CHECKING:
+    from mien.server.app import LiveServer
+
+__all__ = ["create_app"]
+
+_MAX_COMMAND_BYTES = 8192
+_MAX_CLIP_BYTES = 32 * 1024 * 1024
+
+
+class Health(BaseModel):
+    """Server health and counters."""
+
+    status: str = Field(description='"ok"')
+    uptime_s: float = Field(description="Seconds since the server started")
+    tick_hz: float = Field(description="Clock rate, ticks per second")
+    ticks: int = Field(description="Ticks run")
+    late_ticks: int = Field(description="Ticks that overran their budget")
+    skipped_ticks: int = Field(description="Ticks skipped to catch up after a stall")
+    tick_errors: int = Field(description="Ticks that raised (logged)")
+    max_tick_cost_ms: float = Field(description="Largest tick work time, milliseconds")
+    datagrams_received: int = Field(description="UDP datagrams received")
+    datagrams_accepted: int = Field(description="UDP datagrams parsed and queued")
+    ws_commands_accepted: int = Field(description="WebSocket commands parsed and queued")
+    http_commands: int = Field(description="Commands accepted over HTTP")
+    coalesced: int = Field(description="State messages superseded before a tick applied them")
+    rejections: dict[str, int] = Field(description="Dropped messages per reason")
+    viewers: int = Field(description="Connected WebSocket viewers")
+    characters: int = Field(description="Number of characters")
+    frames_sent: int = Field(description="WebSocket frames handed to viewers")
+    frames_dropped: int = Field(description="Frames replaced before a slow viewer read them")
+
+
+class CharacterCreate(BaseModel):
+    """A new character."""
+
+    id: str = Field(pattern=r"^[A-Za-z0-9_.\-]{1,64}$", description="Character id")
+    head: str = Field("default", description="Head: default, builtin or ict")
+    identity: str | None = Field(None, description="Identity preset of the head (null = default)")
+    seed: int = Field(0, description="Seed of idle behaviour and laughter")
+    idle: bool = Field(True, description="Idle behaviour on or off")
+    expression_basis: str = Field("facs", description="facs or feature_points")
+
+
+class CharacterInfo(BaseModel):
+    """A character."""
+
+    id: str
+    row: int = Field(description="Row in the server's batch (the frame's character row)")
+    head: str
+    identity: str | None
+    seed: int
+    idle: bool
+    expression_basis: str
+    target_names: list[str] = Field(description="Morph targets, in frame weight order")
+    frame_bytes: int = Field(description="Bytes of one WebSocket frame of this character")
+
+
+class CharacterState(BaseModel):
+    """A character's face at the last tick."""
+
+    id: str
+    tick: int
+    time_s: float = Field(description="Server clock, seconds")
+    aus: dict[str, float] = Field(description="AU channel intensities 0..5")
+    pose_deg: dict[str, float] = Field(description="Head and gaze angles, degrees")
+    weights: dict[str, float] = Field(description="Morph target weights 0..1")
+
+
+class AusCommand(BaseModel):
+    """Full AU state (AUs not named go to 0), as in an OpenFACS datagram."""
+
+    aus: dict[str, float] = Field(description='AU -> intensity 0..5, e.g. {"AU12": 3, "AU6L": 1.5}')
+    speed: float | None = Field(None, description="OpenFACS Speed 0..1 per tick at 60 Hz")
+    speeds: dict[str, float] | None = Field(None, description="Per-AU speed 0..1")
+    tau_s: dict[str, float] | None = Field(None, description="Per-AU time constant, seconds")
+
+
+class EmotionCommand(BaseModel):
+    """An emotion or blend event."""
+
+    emotion: str = Field(description="joy, sadness, anger, surprise, disgust, fear, a blend or an alias")
+    intensity: float = Field(1.0, description="0..5; 1 = the prototype")
+
+
+class PadCommand(BaseModel):
+    """A PAD (pleasure, arousal, dominance) state, each -1..1."""
+
+    pleasure: float
+    arousal: float
+    dominance: float
+
+
+class LaughterCommand(BaseModel):
+    """A laugh or smile."""
+
+    type: str = Field(description="One of the 13 laugh and smile types, e.g. laughter")
+    intensity: float = Field(1.0, description="0..5")
+
+
+class Accepted(BaseModel):
+    """A command was queued for the next tick."""
+
+    queued: bool = True
+    character: str
+
+
+class ErrorBody(BaseModel):
+    """An error."""
+
+    detail: str
+
+
+_ERRORS: dict[int | str, dict[str, Any]] = {
+    400: {"model": ErrorBody, "description": "Bad input (names the value)"},
+    401: {"model": ErrorBody, "description": "Missing or wrong access token"},
+    404: {"model": ErrorBody, "description": "No such character"},
+}
+
+
+def _info(entry: Entry) -> CharacterInfo:
+    spec = entry.spec
+    names = list(entry.rig.target_names)
+    return CharacterInfo(
+        id=spec.id,
+        row=entry.row,
+        head=spec.head,
+        identity=spec.identity,
+        seed=spec.seed,
+        idle=spec.idle,
+        expression_basis=spec.expression_basis,
+        target_names=names,
+        frame_bytes=frame_bytes(len(names)),
+    )
+
+
+def create_app(server: LiveServer) -> FastAPI:
+    """The FastAPI app of ``server``; mounts the browser viewer (``mien.viewer.routes.mount``) when present."""
+    import orjson
+
+    app = FastAPI(
+        title="mien live",
+        version="1",
+        description="Drive virtual characters' faces: AUs (OpenFACS), emotions, PAD, laughter. "
+        "The WebSocket stream is at /ws?character=ID (binary frames, see docs/SERVER.md).",
+    )
+    registry = server.registry
+
+    def check_token(request: Request) -> None:
+        if server.token is None:
+            return
+        header = request.headers.get("authorization", "")
+        given = header[7:] if header.lower().startswith("bearer ") else request.query_params.get("token", "")
+        if not secrets.compare_digest(given.encode(), server.token.encode()):
+            raise HTTPException(status.HTTP_401_UNAUTHORIZED, "missing or wrong access token (Bearer or ?token=)")
+
+    @app.exception_handler(MienError)
+    async def _mien_error(request: Request, exc: MienError) -> JSONResponse:
+        code = 404 if isinstance(exc, UnknownNameError) and exc.kind == "character" else 400
+        return JSONResponse({"detail": str(exc)}, status_code=code)
+
+    def entry_of(character_id: str) -> Entry:
+        return registry.get(character_id)
+
+    def queue(character_id: str, command: dict[str, Any]) -> Accepted:
+        entry = entry_of(character_id)
+        command["character"] = entry.spec.id
+        try:
+            message = parse_message(orjson.dumps(command), max_bytes=_MAX_COMMAND_BYTES)
+            registry.submit(message)
+        except MessageRejected as exc:
+            registry.reject(exc)
+            raise HTTPException(status.HTTP_400_BAD_REQUEST, str(exc)) from None
+        registry.counters.http_commands += 1
+        return Accepted(character=entry.spec.id)
+
+    api = [Depends(check_token)]
+
+    @app.get("/api/health", response_model=Health, dependencies=api, responses=_ERRORS)
+    def health() -> Health:
+        """Uptime, clock, message and viewer counters, rejections per reason."""
+        c, s = registry.counters, server.clock.stats
+        return Health(
+            status="ok",
+            uptime_s=time.monotonic() - server.started_monotonic,
+            tick_hz=server.clock.tick_hz,
+            ticks=s.ticks,
+            late_ticks=s.late_ticks,
+            skipped_ticks=s.skipped_ticks,
+            tick_errors=s.tick_errors,
+            max_tick_cost_ms=s.max_tick_cost_s * 1e3,
+            datagrams_received=c.datagrams_received,
+            datagrams_accepted=c.datagrams_accepted,
+            ws_commands_accepted=c.ws_commands_accepted,
+            http_commands=c.http_commands,
+            coalesced=c.coalesced,
+            rejections=dict(c.rejections),
+            viewers=len(server.hub.viewers),
+            characters=len(registry.entries),
+            frames_sent=c.frames_sent,
+            frames_dropped=c.frames_dropped,
+        )
+
+    @app.get("/api/characters", response_model=list[CharacterInfo], dependencies=api, responses=_ERRORS)
+    def list_characters() -> list[CharacterInfo]:
+        """Every character, in creation order (the first is the default target)."""
+        return [_info(entry) for entry in registry.entries.values()]
+
+    @app.post("/api/characters", response_model=CharacterInfo, status_code=201, dependencies=api, responses=_ERRORS)
+    def create_character(body: CharacterCreate) -> CharacterInfo:
+        """Create a character with its own head, identity, seed, idle and emotion settings."""
+        return _info(registry.add(CharacterSpec(**body.model_dump())))
+
+    @app.get("/api/characters/{character_id}", response_model=CharacterState, dependencies=api, responses=_ERRORS)
+    def character_state(character_id: str) -> CharacterState:
+        """The character's face at the last tick: AUs, pose and morph weights."""
+        entry = entry_of(character_id)
+        state = registry.state(entry)
+        weights = registry.rig_output(entry)[0].tolist() if entry.row < registry.frames.shape[0] else []
+        au_names = [name for name in state if name.startswith("AU")]
+        return CharacterState(
+            id=entry.spec.id,
+            tick=server.clock.tick,
+            time_s=registry.time_s,
+            aus={name: state[name] for name in au_names},
+            pose_deg={name: value for name, value in state.items() if not name.startswith("AU")},
+            weights={name: float(w) for name, w in zip(entry.rig.target_names, weights, strict=False)},
+        )
+
+    @app.delete("/api/characters/{character_id}", status_code=204, dependencies=api, responses=_ERRORS)
+    def delete_character(character_id: str) -> Response:
+        """Remove a character (its viewers get no more frames)."""
+        registry.remove(character_id)
+        return Response(status_code=204)
+
+    @app.post("/api/characters/{character_id}/aus", response_model=Accepted, status_code=202, dependencies=api,
+              responses=_ERRORS)  # fmt: skip
+    def send_aus(character_id: str, body: AusCommand) -> Accepted:
+        """Set the full AU state (AUs not named go to 0) with an optional OpenFACS Speed."""
+        command: dict[str, Any] = dict(body.aus)
+        if body.speed is not None:
+            command["Speed"] = body.speed
+        if body.speeds:
+            command["speeds"] = body.speeds
+        if body.tau_s:
+            command["tau_s"] = body.tau_s
+        if not command:
+            command["AU1"] = 0.0  # an empty state still means "every AU to 0"
+        return queue(character_id, command)
+
+    @app.post("/api/characters/{character_id}/emotion", response_model=Accepted, status_code=202,
+              dependencies=api, responses=_ERRORS)  # fmt: skip
+    def send_emotion(character_id: str, body: EmotionCommand) -> Accepted:
+        """Trigger an emotion or blend event now."""
+        return queue(character_id, {"emotion": body.emotion, "intensity": body.intensity})
+
+    @app.post("/api/characters/{character_id}/pad", response_model=Accepted, status_code=202, dependencies=api,
+              responses=_ERRORS)  # fmt: skip
+    def send_pad(character_id: str, body: PadCommand) -> Accepted:
+        """Move the PAD state (each -1..1)."""
+        return queue(character_id, {"pad": [body.pleasure, body.arousal, body.dominance]})
+
+    @app.post("/api/characters/{character_id}/laughter", response_model=Accepted, status_code=202,
+              dependencies=api, responses=_ERRORS)  # fmt: skip
+    def send_laughter(character_id: str, body: LaughterCommand) -> Accepted:
+        """Play a laugh or smile now."""
+        return queue(character_id, {"laugh": body.type, "intensity": body.intensity})
+
+    @app.post("/api/characters/{character_id}/clip", response_model=Accepted, status_code=202, dependencies=api,
+              responses=_ERRORS, openapi_extra={"requestBody": {"required": True, "content": {
+                  "application/octet-stream": {"schema": {"type": "string", "format": "binary"}}}}})  # fmt: skip
+    async def send_clip(
+        character_id: str, request: Request, suffix: str = Query(description="File suffix, e.g. .json or .npz")
+    ) -> Accepted:
+        """Play a clip file (its bytes as the body; ``suffix`` picks the reader) on the character now."""
+        entry = entry_of(character_id)
+        data = await request.body()
+        if len(data) > _MAX_CLIP_BYTES:
+            raise HTTPException(413, f"clip of {len(data)} bytes is over {_MAX_CLIP_BYTES}")
+        entry.clips.append(_read_clip(data, suffix))
+        registry.counters.http_commands += 1
+        return Accepted(character=entry.spec.id)
+
+    @app.get("/api/characters/{character_id}/head.glb", dependencies=api,
+             responses={**_ERRORS, 200: {"content": {"model/gltf-binary": {}}}, 501: {"model": ErrorBody}})  # fmt: skip
+    def head_glb(character_id: str) -> Response:
+        """The character's head as glTF binary (mesh and morph targets in frame weight order)."""
+        entry = entry_of(character_id)
+        try:
+            from mien.exchange.glb import head_glb_bytes  # type: ignore[import-not-found,unused-ignore]
+        except ImportError:
+            return JSONResponse({"detail": "glb export is not available yet (mien.exchange.glb)"}, status_code=501)
+        return Response(head_glb_bytes(entry.rig), media_type="model/gltf-binary")
+
+    @app.websocket("/ws")
+    async def stream(websocket: WebSocket, character: str | None = None, token: str | None = None) -> None:
+        """Binary frames of ``character`` (default: the first) each tick; JSON commands the other way."""
+        if server.token is not None and not secrets.compare_digest((token or "").encode(), server.token.encode()):
+            await websocket.close(code=1008, reason="missing or wrong access token (?token=)")
+            return
+        if character is not None and character not in registry.entries:
+            await websocket.close(code=1008, reason=f"unknown character {character!r}")
+            return
+        await websocket.accept()
+        await server.hub.serve(websocket, character)
+
+    try:
+        from mien.viewer import routes  # type: ignore[attr-defined,unused-ignore]
+    except ImportError:
+        pass
+    else:
+        routes.mount(app)
+    return app
+
+
+def _read_clip(data: bytes, suffix: str) -> Any:
+    import tempfile
+    from pathlib import Path
+
+    from mien.errors import InvalidValueError
+    from mien.exchange import reader_for
+
+    if not suffix.startswith(".") or "/" in suffix or len(suffix) > 16:
+        raise InvalidValueError("suffix", suffix, "a file suffix such as .json or .npz")
+    reader = reader_for(f"clip{suffix}")
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / f"clip{suffix}"
+        path.write_bytes(data)
+        try:
+            return reader(path)
+        except MienError:
+            raise
+        except Exception as exc:  # a reader's own parse error on garbage bytes
+            raise InvalidValueError("clip", f"{len(data)} bytes", f"a readable {suffix} clip ({exc})") from None
