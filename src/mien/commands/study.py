@@ -1,0 +1,155 @@
+"""``mien study``: perception studies. ``stimuli`` renders a design's videos and manifest, ``serve`` runs the web
+experiment, ``export`` writes the answers as CSV, ``analyze`` writes the HTML report (see docs/STUDIES.md)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from mien.study.design import Design
+    from mien.study.storage import Store
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "study",
+        help="perception studies: render stimuli, run the web experiment, export and analyse the answers",
+        description="Perception studies as in Broekens et al. and Mascaró et al.: a design TOML file -> "
+        "stimuli (rendered or supplied videos) -> a web experiment in the browser -> answers in SQLite or "
+        "PostgreSQL -> CSV and an HTML report.",
+    )
+    parser.set_defaults(handler=lambda _args: parser.print_help() or 0)
+    commands = parser.add_subparsers(dest="study_command", metavar="STUDY_COMMAND")
+
+    def with_design(name: str, help_text: str) -> argparse.ArgumentParser:
+        sub = commands.add_parser(name, help=help_text, description=help_text)
+        sub.add_argument("design", type=Path, help="the study design TOML file")
+        sub.add_argument(
+            "--stimuli", type=Path, help="stimuli folder with manifest.json (default: stimuli/ next to the design)"
+        )
+        return sub
+
+    def with_db(sub: argparse.ArgumentParser) -> None:
+        sub.add_argument(
+            "--db",
+            help="database: a SQLite file or URL, or postgresql://USER@HOST:PORT/DB "
+            "(default: STUDY_NAME.sqlite next to the design)",
+        )
+
+    stimuli = with_design("stimuli", "render the design's stimulus videos (or check supplied ones) and write the manifest")
+    stimuli.set_defaults(handler=run_stimuli)
+
+    serve = with_design("serve", "run the web experiment (consent, instructions, stimuli, questions, completion)")
+    with_db(serve)
+    serve.add_argument("--host", default="127.0.0.1", help="address to listen on (default %(default)s)")
+    serve.add_argument("--port", type=int, default=8000, help="TCP port (default %(default)s; 0 = any free port)")
+    serve.set_defaults(handler=run_serve)
+
+    export = with_design("export", "write the stored answers as one long CSV (one row per answered question)")
+    with_db(export)
+    export.add_argument("-o", "--out", type=Path, default=Path("answers.csv"), help="CSV path (default %(default)s)")
+    export.set_defaults(handler=run_export)
+
+    analyze = with_design("analyze", "analyse the answers (quality, profiles, rm-ANOVA, plots) into an HTML report")
+    with_db(analyze)
+    analyze.add_argument("--answers", type=Path, help="analyse this exported CSV instead of the database")
+    analyze.add_argument(
+        "-o", "--out", type=Path, default=Path("study-report"), help="report folder (default %(default)s)"
+    )
+    analyze.set_defaults(handler=run_analyze)
+
+
+def _design(args: argparse.Namespace) -> Design:
+    from mien.study.design import load_design
+
+    return load_design(args.design)
+
+
+def _stimuli_folder(args: argparse.Namespace, design: Design) -> Path:
+    return Path(args.stimuli) if args.stimuli is not None else design.path.parent / "stimuli"
+
+
+def _store(args: argparse.Namespace, design: Design) -> Store:
+    from mien.study.storage import Store, database_url
+
+    return Store(database_url(args.db, design.path.parent / f"{design.name}.sqlite"))
+
+
+def run_stimuli(args: argparse.Namespace) -> int:
+    from mien.study.stimuli import make_stimuli
+
+    design = _design(args)
+    folder = _stimuli_folder(args, design)
+    result = make_stimuli(design, folder)
+    print(
+        f"{len(design.stimuli)} stimuli in {folder} ({result.rendered} made, {result.skipped} already done); "
+        f"manifest: {result.manifest_path}"
+    )
+    return 0
+
+
+def _checked_manifest(design: Design, folder: Path) -> dict:
+    from mien.errors import InvalidValueError
+    from mien.study.stimuli import load_manifest
+
+    manifest = load_manifest(folder)
+    ids = [entry["id"] for entry in manifest["stimuli"]]
+    if manifest.get("study") != design.name or ids != [spec.id for spec in design.stimuli]:
+        raise InvalidValueError(
+            f"{folder / 'manifest.json'}",
+            manifest.get("study"),
+            f"the manifest of study {design.name!r} with its {len(design.stimuli)} stimuli: re-run "
+            f"`mien study stimuli {design.path}`",
+        )
+    return manifest
+
+
+def run_serve(args: argparse.Namespace) -> int:
+    from mien.study.runner import create_app, serve
+
+    design = _design(args)
+    folder = _stimuli_folder(args, design)
+    manifest = _checked_manifest(design, folder)
+    store = _store(args, design)
+    store.register_stimuli(design.name, design.protocol, manifest["stimuli"])
+    app = create_app(design, manifest, folder, store)
+    print(f"study {design.name!r}: http://{args.host}:{args.port}/?participant=ID  (Ctrl-C to stop)", flush=True)
+    try:
+        serve(app, args.host, args.port)
+    finally:
+        store.close()
+    return 0
+
+
+def run_export(args: argparse.Namespace) -> int:
+    from mien.study.export import write_answers_csv
+
+    design = _design(args)
+    with _store(args, design) as store:
+        path, rows = write_answers_csv(store, args.out, design.name)
+    print(f"wrote {rows} answers of study {design.name!r} to {path}")
+    return 0
+
+
+def run_analyze(args: argparse.Namespace) -> int:
+    from mien.study.analysis import analyze, analyze_csv
+    from mien.study.report import write_report
+
+    design = _design(args)
+    if args.answers is not None:
+        result = analyze_csv(args.answers)
+    else:
+        with _store(args, design) as store:
+            frame = store.answers_frame(design.name)
+        if frame.empty:
+            from mien.errors import InvalidValueError
+
+            raise InvalidValueError(
+                "answers", 0, f"at least one stored answer of study {design.name!r} (run `mien study serve` first)"
+            )
+        result = analyze(frame, source=str(args.db or design.name))
+    path = write_report(result, args.out, stimuli=_stimuli_folder(args, design))
+    print(f"report: {path}")
+    return 0

@@ -1,0 +1,256 @@
+"""The web experiment: a FastAPI app serving the pages (``static/``), the stimulus videos and a small JSON API.
+
+Flow for a participant opening ``/?participant=ID`` (an id is generated when absent): consent ->
+instructions -> one stimulus at a time (the video plays once, "Play again" replays it, every play counted as
+nrShows) with the protocol's questions -> next -> completion page (code and/or redirect). Each answer is
+POSTed and committed at once (:meth:`mien.study.storage.Store.record_answer`); reopening the link resumes at
+the first unanswered stimulus. Everything is served by the app itself: it works with no internet.
+
+API (JSON):
+
+- ``POST /api/session {"participant": ID | null}`` -> the participant's plan and progress (created on first
+  arrival: label order seeded by the id, within-subject blocks from the balanced Latin square).
+- ``POST /api/consent {"participant"}``
+- ``POST /api/show {"participant", "stimulus", "nr_shows"}`` -> the stored play count (idempotent: max).
+- ``POST /api/answer {"participant", "stimulus", "position", "ratings": {question: int}, "nr_shows"}`` ->
+  ``{"stored": new rows, "next_position", "done", ...}``; a repeated submit stores nothing twice.
+- ``GET /api/health``
+
+Bad requests get 4xx with a message naming the value; a locked or unreachable database gets 503 after the
+store's retries (the page retries); the server never dies of a request.
+"""
+
+# No ``from __future__ import annotations``: FastAPI reads the request models of the endpoints (classes local
+# to create_app) from the evaluated annotations.
+
+import re
+import secrets
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from mien.errors import MissingExtraError
+
+if TYPE_CHECKING:
+    from fastapi import FastAPI
+
+    from mien.study.design import Design
+    from mien.study.storage import ParticipantRecord, Store
+
+__all__ = ["PARTICIPANT_PATTERN", "create_app", "serve"]
+
+STATIC = Path(__file__).with_name("static")
+"""The pages: index.html, study.js, study.css."""
+
+PARTICIPANT_PATTERN = re.compile(r"^[A-Za-z0-9_.@:-]{1,128}$")
+"""Accepted participant ids (recruitment platforms' ids fit: letters, digits, ``_ . @ : -``, up to 128)."""
+
+BUILTIN_CONSENT = (
+    "This study shows short videos of a virtual character's face and asks how you perceive them. Taking part "
+    "is voluntary; you can stop at any time by closing the page, and you can come back to the same link to "
+    "continue. Your answers are stored under your participant id only, with no other personal data."
+)
+"""Consent text used when the design gives none."""
+
+BUILTIN_INSTRUCTIONS = {
+    "broekens": "You will see short videos of a virtual character's face, one at a time. Each plays once; use "
+    '"Play again" as often as you need. Then rate how much the face expresses each emotion (1 = not at all, 5 = '
+    "very) and how natural the expression looks (1..5), and press Next.",
+    "mascaro": "You will see short videos of a virtual character laughing or smiling, one at a time, with a "
+    'description of the expression. Use "Play again" as often as you need. Answer both questions from 0 (not '
+    "at all) to 5 (completely) and press Next.",
+}
+"""Instructions per protocol used when the design gives none."""
+
+
+def create_app(design: "Design", manifest: dict[str, Any], stimuli_folder: str | Path, store: "Store") -> "FastAPI":
+    """The experiment app for ``design`` with the stimuli of ``manifest`` (served from ``stimuli_folder``),
+    storing into ``store`` (whose stimuli table should hold the manifest: :meth:`Store.register_stimuli`)."""
+    try:
+        from fastapi import FastAPI, HTTPException, Request
+        from fastapi.responses import FileResponse, JSONResponse, Response
+        from fastapi.staticfiles import StaticFiles
+        from pydantic import BaseModel, Field
+    except ImportError:
+        raise MissingExtraError("fastapi", "study") from None
+
+    from mien.study.protocol import participant_plan, questions
+    from mien.study.storage import StorageUnavailableError
+
+    folder = Path(stimuli_folder).resolve()
+    entries = {entry["id"]: entry for entry in manifest["stimuli"]}
+    files = {entry["file"] for entry in manifest["stimuli"]}
+    asked = {q.key: q for q in questions(design.protocol)}
+    study = design.name
+    plans: dict[str, "ParticipantRecord"] = {}
+
+    class SessionRequest(BaseModel):
+        participant: str | None = Field(default=None, max_length=128)
+
+    class ConsentRequest(BaseModel):
+        participant: str = Field(max_length=128)
+
+    class ShowRequest(BaseModel):
+        participant: str = Field(max_length=128)
+        stimulus: str = Field(max_length=64)
+        nr_shows: int = Field(ge=1, le=10_000)
+
+    class AnswerRequest(BaseModel):
+        participant: str = Field(max_length=128)
+        stimulus: str = Field(max_length=64)
+        position: int = Field(ge=0)
+        ratings: dict[str, int]
+        nr_shows: int = Field(ge=0, le=10_000)
+
+    app = FastAPI(title=f"mien study: {study}", docs_url=None, redoc_url=None)
+    app.mount("/static", StaticFiles(directory=STATIC), name="static")
+
+    @app.exception_handler(StorageUnavailableError)
+    async def _unavailable(_request: Request, error: StorageUnavailableError) -> JSONResponse:
+        return JSONResponse({"detail": str(error)}, status_code=503, headers={"Retry-After": "1"})
+
+    def record(participant: str) -> "ParticipantRecord":
+        if not PARTICIPANT_PATTERN.match(participant):
+            raise HTTPException(
+                422, f"participant {participant!r} is invalid: use 1-128 letters, digits or _ . @ : - in ?participant="
+            )
+        if participant in plans:
+            return plans[participant]
+        found = store.participant(study, participant)
+        if found is None:
+            raise HTTPException(404, f"participant {participant!r} has no session: open /?participant=ID first")
+        plans[participant] = found
+        return found
+
+    def status(rec: "ParticipantRecord") -> dict[str, Any]:
+        answered, shows = store.progress(study, rec.participant)
+        remaining = [k for k, s in enumerate(rec.sequence) if s not in answered]
+        done = not remaining
+        if done and rec.completed_at is None:
+            store.record_completed(study, rec.participant)
+        redirect = design.redirect_url.replace("{participant}", rec.participant) if design.redirect_url else ""
+        return {
+            "next_position": remaining[0] if remaining else len(rec.sequence),
+            "answered": len(rec.sequence) - len(remaining),
+            "nr_shows": shows,
+            "done": done,
+            "completion_code": design.completion_code if done else "",
+            "redirect_url": redirect if done else "",
+        }
+
+    @app.get("/", include_in_schema=False)
+    def index() -> FileResponse:
+        return FileResponse(STATIC / "index.html", headers={"Cache-Control": "no-store"})
+
+    @app.get("/favicon.ico", include_in_schema=False)
+    def favicon() -> Response:
+        return Response(status_code=204)
+
+    @app.get("/api/health")
+    def health() -> dict[str, Any]:
+        return {"study": study, "protocol": design.protocol, "stimuli": len(entries)}
+
+    @app.get("/stimuli/{name}")
+    def stimulus_file(name: str) -> FileResponse:
+        if name not in files:
+            raise HTTPException(404, f"stimulus file {name!r} is not in the manifest")
+        return FileResponse(folder / name, headers={"Cache-Control": "max-age=3600"})
+
+    @app.post("/api/session")
+    def session(request: SessionRequest) -> dict[str, Any]:
+        participant = request.participant or secrets.token_hex(6)
+        if not PARTICIPANT_PATTERN.match(participant):
+            raise HTTPException(
+                422, f"participant {participant!r} is invalid: use 1-128 letters, digits or _ . @ : - in ?participant="
+            )
+
+        def plan(ordinal: int) -> tuple[Any, Any, Any]:
+            p = participant_plan(design, participant, ordinal)
+            return p.sequence, p.label_order, p.block_order
+
+        rec = plans.get(participant) or store.ensure_participant(study, participant, plan)
+        plans[participant] = rec
+        shown = [
+            {
+                "key": key,
+                "text": asked[key].text,
+                "low": asked[key].low,
+                "high": asked[key].high,
+                "low_text": asked[key].low_text,
+                "high_text": asked[key].high_text,
+            }
+            for key in rec.label_order
+        ]
+        sequence = [
+            {
+                "position": k,
+                "stimulus": s,
+                "url": f"/stimuli/{entries[s]['file']}",
+                "description": str(entries[s].get("conditions", {}).get("description", "")),
+            }
+            for k, s in enumerate(rec.sequence)
+        ]
+        return {
+            "participant": participant,
+            "study": study,
+            "protocol": design.protocol,
+            "consent_given": rec.consent_at is not None,
+            "consent_text": design.consent_text or BUILTIN_CONSENT,
+            "instructions_text": design.instructions_text or BUILTIN_INSTRUCTIONS[design.protocol],
+            "questions": shown,
+            "sequence": sequence,
+            **status(rec),
+        }
+
+    @app.post("/api/consent")
+    def consent(request: ConsentRequest) -> dict[str, Any]:
+        rec = record(request.participant)
+        store.record_consent(study, rec.participant)
+        plans.pop(rec.participant, None)
+        return {"consent_given": True}
+
+    @app.post("/api/show")
+    def show(request: ShowRequest) -> dict[str, Any]:
+        rec = record(request.participant)
+        if request.stimulus not in rec.sequence:
+            raise HTTPException(422, f"stimulus {request.stimulus!r} is not in participant {rec.participant!r}'s set")
+        return {"nr_shows": store.record_show(study, rec.participant, request.stimulus, request.nr_shows)}
+
+    @app.post("/api/answer")
+    def answer(request: AnswerRequest) -> dict[str, Any]:
+        rec = record(request.participant)
+        if request.position >= len(rec.sequence) or rec.sequence[request.position] != request.stimulus:
+            raise HTTPException(
+                422,
+                f"stimulus {request.stimulus!r} is not at position {request.position} of participant "
+                f"{rec.participant!r}'s sequence",
+            )
+        missing = [key for key in rec.label_order if key not in request.ratings]
+        extra = [key for key in request.ratings if key not in asked]
+        if missing or extra:
+            raise HTTPException(422, f"ratings must answer exactly {list(rec.label_order)}; missing {missing}, unknown {extra}")
+        for key, value in request.ratings.items():
+            q = asked[key]
+            if not q.low <= value <= q.high:
+                raise HTTPException(422, f"rating {key}={value} is invalid: expected an integer {q.low}..{q.high}")
+        label_positions = {key: k for k, key in enumerate(rec.label_order) if asked[key].is_label}
+        stored = store.record_answer(
+            study,
+            rec.participant,
+            request.stimulus,
+            request.position,
+            request.ratings,
+            label_positions,
+            request.nr_shows,
+        )
+        return {"stored": stored, **status(rec)}
+
+    return app
+
+
+def serve(app: "FastAPI", host: str = "127.0.0.1", port: int = 8000) -> None:
+    """Run ``app`` with uvicorn until interrupted (Ctrl-C)."""
+    try:
+        import uvicorn
+    except ImportError:
+        raise MissingExtraError("uvicorn", "study") from None
+    uvicorn.run(app, host=host, port=port, log_level="warning", access_log=False)
