@@ -1,18 +1,25 @@
-"""A character: FACS targets, emotion events, mood, laughter and idle behaviour combined into face frames.
+"""Characters: FACS targets, emotion events, mood, laughter and idle behaviour combined into face frames.
 
-Layers, added in this order into the (62,) face frame (see :data:`~mien.facs.catalogue.FACE_CHANNELS`):
+One implementation for one character and for many: :class:`CharacterBatch` steps n characters (rows) with
+vectorised numpy, and :class:`Character` is a batch of one, so a single character cannot drift from a row
+of a crowd. Layers, added in this order into each (62,) face frame (see
+:data:`~mien.facs.catalogue.FACE_CHANNELS`):
 
-1. FACS: held AU targets with time-based dynamics and timed onset/apex/offset actions (:class:`FacsEngine`).
-2. Emotions (Broekens): ``emotion @ basis + shown_mood @ closed_mouth_basis`` (:class:`EmotionEngine`).
-   With ``expression_basis="facs"`` the basis is the EMFACS prototypes (AU channels); with
-   ``"feature_points"`` the emotion drives the 54 feature-point targets (:attr:`Character.feature_weights`,
+1. FACS: held AU targets with time-based dynamics and timed onset/apex/offset actions
+   (:class:`~mien.facs.dynamics.FacsBatch`).
+2. Emotions (Broekens): ``emotion @ basis + shown_mood @ closed_mouth_basis``
+   (:class:`~mien.affect.engine.EmotionBatch`, events, PAD states, moods). With ``expression_basis="facs"``
+   the basis is the EMFACS prototypes (AU channels, scaled by :func:`~mien.affect.basis.saturate`); with
+   ``"feature_points"`` the emotion drives the 54 feature-point targets (:attr:`CharacterBatch.feature_weights`,
    metres) and leaves the AU channels alone.
 3. Laughter: the face clip of an active laugh or smile; while it plays, idle mouth motion yields.
-4. Idle: blinks (combined by max, so a blink still closes smiling eyes), micro random walks, gaze, wobble.
+4. Idle: blinks (combined by max, so a blink still closes smiling eyes), micro random walks, gaze, wobble
+   (:class:`~mien.facs.idle.IdleBatch`).
 
 AU channels are then clipped to 0..5 (a live stream must not break on an over-driven sum: the clamp is
 documented, not an error). The face at time t depends only on the seed and the commands given, so runs are
-reproducible; time must not go backwards.
+reproducible; time must not go backwards. Small products are written as ``einsum`` so that no step goes
+through a multi-threaded BLAS (which slows small matrices down on a busy machine).
 """
 
 from __future__ import annotations
@@ -26,14 +33,14 @@ import numpy as np
 
 from mien.affect.basis import facs_basis, feature_point_basis, saturate
 from mien.affect.emotions import Blend, blend_components, check_intensity
-from mien.affect.engine import EmotionEngine, mood_step, shown_mood
-from mien.affect.envelope import Envelope, envelope_values
+from mien.affect.engine import EmotionBatch
+from mien.affect.envelope import Envelope
 from mien.errors import InvalidValueError
-from mien.facs.catalogue import FACE_CHANNELS, POSE_CHANNELS, au_channels
+from mien.facs.catalogue import FACE_CHANNELS, POSE_CHANNELS
 from mien.facs.clip import Clip
-from mien.facs.dynamics import FacsEngine, TimedAction, time_constant_from_speed
-from mien.facs.idle import Idle, IdleBatch, IdleSettings
-from mien.facs.intensity import AUSpec, parse_au
+from mien.facs.dynamics import FacsBatch, RowIndex, TimedAction
+from mien.facs.idle import IdleBatch, IdleSettings
+from mien.facs.intensity import AUSpec
 
 __all__ = ["EXPRESSION_BASES", "Character", "CharacterBatch"]
 
@@ -42,6 +49,7 @@ EXPRESSION_BASES = ("facs", "feature_points")
 
 _N = len(FACE_CHANNELS)
 _N_AU = _N - len(POSE_CHANNELS)
+_N_FEATURES = feature_point_basis().shape[1]
 
 
 def _mouth_channel_ids() -> np.ndarray:
@@ -49,10 +57,37 @@ def _mouth_channel_ids() -> np.ndarray:
     return np.array([i for i, name in enumerate(FACE_CHANNELS[:_N_AU]) if int(name[2:].rstrip("LR")) in mouth_codes])
 
 
+_MOUTH = _mouth_channel_ids()
+
+
 def _idle_settings(idle: IdleSettings | bool) -> IdleSettings | None:
     if isinstance(idle, IdleSettings):
         return idle
-    return IdleSettings() if idle else None
+    if isinstance(idle, bool | np.bool_):
+        return IdleSettings() if idle else None
+    raise InvalidValueError("idle", idle, "True, False or an IdleSettings")
+
+
+def _check_seed(seed: object) -> int:
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or int(seed) < 0:
+        raise InvalidValueError("seed", seed, "a non-negative integer")
+    return int(seed)
+
+
+def _check_basis(expression_basis: str) -> str:
+    if expression_basis not in EXPRESSION_BASES:
+        raise InvalidValueError("expression_basis", expression_basis, f"one of {', '.join(EXPRESSION_BASES)}")
+    return expression_basis
+
+
+def _mood_vector(mood: Mapping[str, float] | np.ndarray) -> np.ndarray | Any:
+    if isinstance(mood, Mapping):
+        vector = np.zeros(6)
+        for name, value in mood.items():
+            for index, weight in blend_components(name):
+                vector[index] += weight * check_intensity(value, f"mood[{name}]")
+        return vector
+    return mood
 
 
 @dataclass(frozen=True, eq=False)
@@ -68,8 +103,342 @@ class _ActiveLaugh:
         return self.clip.sample(t_s - self.start_s)
 
 
+def _face_clip(clip: Clip) -> Clip:
+    """``clip`` over every FACE_CHANNELS column (channels it lacks are 0)."""
+    if not isinstance(clip, Clip):
+        raise InvalidValueError("clip", clip, "a mien Clip over face channels")
+    if clip.channels == FACE_CHANNELS:
+        return clip
+    unknown = [name for name in clip.channels if name not in FACE_CHANNELS]
+    if unknown:
+        raise InvalidValueError("clip channel", unknown[0], "face channels (FACE_CHANNELS: AU12L, head_yaw_deg...)")
+    values = np.zeros((clip.n_frames, _N))
+    for j, name in enumerate(clip.channels):
+        values[:, FACE_CHANNELS.index(name)] = clip.values[:, j]
+    return Clip(values, clip.fps, FACE_CHANNELS)
+
+
+class CharacterBatch:
+    """n characters stepped together (one row each): the one implementation of every layer.
+
+    Rows are stable: :meth:`add_character` returns a row index (reusing a freed row first),
+    :meth:`remove_character` frees it (a freed row's frame is zeros and costs next to nothing to step).
+    ``rows`` arguments are an int, a slice or an int array over active rows; bad rows, names and values
+    raise :class:`~mien.errors.InvalidValueError` / :class:`~mien.errors.UnknownNameError` before any
+    state changes. Times are seconds and must not decrease; the FACS layer starts at t = 0.
+
+    ``seeds``: (n,) seeds, or an int n for seeds ``0..n-1`` (``CharacterBatch(0)`` is empty). ``idle`` and
+    ``expression_basis`` apply to these first rows; :meth:`add_character` chooses per row.
+
+    >>> batch = CharacterBatch(0)
+    >>> a = batch.add_character(seed=1, idle=False)
+    >>> b = batch.add_character(seed=2, idle=False)
+    >>> batch.set_aus(b, {"AU12": 4.0})
+    >>> batch.set_speed(b, 1.0)                   # OpenFACS Speed 1: jump
+    >>> batch.step(1 / 60)[:, FACE_CHANNELS.index("AU12L")].tolist()
+    [0.0, 4.0]
+    """
+
+    def __init__(
+        self,
+        seeds: np.ndarray | int = 0,
+        idle: IdleSettings | bool = True,
+        envelope: Envelope | None = None,
+        mood_time_constant_s: float = 10.0,
+        mood_gain: float = 1.0,
+        mood_max_step_s: float = 0.05,
+        tick_hz: float = 60.0,
+        expression_basis: str = "facs",
+    ) -> None:
+        if isinstance(seeds, int | np.integer) and not isinstance(seeds, bool):
+            if seeds < 0:
+                raise InvalidValueError("seeds", seeds, "a number of characters >= 0 or an array of seeds")
+            seeds_array = np.arange(int(seeds))
+        else:
+            seeds_array = np.atleast_1d(np.asarray(seeds))
+        if seeds_array.size and (seeds_array.dtype.kind not in "iu" or seeds_array.min() < 0):
+            raise InvalidValueError("seeds", seeds, "non-negative integer seeds")
+        basis = _check_basis(expression_basis)
+        settings = _idle_settings(idle)
+        n = int(seeds_array.shape[0])
+        self.tick_hz = float(tick_hz)
+        """Nominal rate of OpenFACS ``Speed`` values, Hz."""
+        self.facs = FacsBatch(n, tick_hz)
+        """The FACS layer."""
+        self.emotions = EmotionBatch(n, envelope, mood_time_constant_s, mood_gain, mood_max_step_s=mood_max_step_s)
+        """The emotion layer (Broekens)."""
+        self.idle = IdleBatch(np.zeros(0, np.int64))
+        """The idle layer (rows without idle have every part off)."""
+        self.idle.add_rows(seeds_array.astype(np.int64), settings)
+        self.seeds = seeds_array.astype(np.int64)
+        """(n,) seed of each row (idle behaviour and default laughter seed)."""
+        self._active = np.ones(n, bool)
+        self._features = np.full(n, basis == "feature_points")
+        self._has_features = bool(self._features.any())
+        self._free: list[int] = []
+        self._laughs: dict[int, list[_ActiveLaugh]] = {}
+        self._basis = facs_basis()
+        self._mood_basis = facs_basis(closed_mouth=True)
+        self._fp_basis = feature_point_basis()
+        self._fp_mood_basis = feature_point_basis(closed_mouth=True)
+        self._frames = np.zeros((n, _N))
+        self._expression = np.zeros((n, _N))
+        self._mood_expression = np.zeros((n, _N))
+        self.feature_weights = np.zeros((n, _N_FEATURES))
+        """(n, 54) feature-point target weights (metres) of the last step; zeros for ``"facs"`` rows."""
+        self._t_s: float | None = None
+
+    # ------------------------------------------------------------------ rows
+
+    @property
+    def n_characters(self) -> int:
+        """Number of rows, freed ones included (the first axis of :meth:`step`'s frames)."""
+        return int(self.seeds.shape[0])
+
+    @property
+    def time_s(self) -> float:
+        """Time of the last :meth:`step`, seconds (0 before the first)."""
+        return 0.0 if self._t_s is None else self._t_s
+
+    def active_rows(self) -> np.ndarray:
+        """(k,) int indices of the rows in use, ascending."""
+        return np.flatnonzero(self._active)
+
+    def expression_basis(self, row: int) -> str:
+        """``"facs"`` or ``"feature_points"``: how emotions reach ``row``'s face."""
+        return "feature_points" if self._features[self._rows(row)[0]] else "facs"
+
+    def add_character(self, seed: int = 0, idle: IdleSettings | bool = True, expression_basis: str = "facs") -> int:
+        """Add a neutral character and return its row (a freed row is reused first).
+
+        ``seed`` (int >= 0) seeds its idle behaviour and laughter; ``idle``: True, False or an
+        :class:`IdleSettings`; ``expression_basis``: one of :data:`EXPRESSION_BASES`. Its idle starts now.
+        """
+        value = _check_seed(seed)
+        settings = _idle_settings(idle)
+        basis = _check_basis(expression_basis)
+        if self._free:
+            row = self._free.pop(0)
+            self.idle.reset_rows(np.array([row]), np.array([value]), settings, self.time_s)
+        else:
+            row = self.n_characters
+            self.facs.add_rows(1)
+            self.emotions.add_rows(1)
+            self.idle.add_rows(np.array([value]), settings, self.time_s)
+            self.seeds = np.append(self.seeds, value)
+            self._active = np.append(self._active, False)
+            self._features = np.append(self._features, False)
+            self._frames = np.zeros((row + 1, _N))
+            self._expression = np.zeros((row + 1, _N))
+            self._mood_expression = np.zeros((row + 1, _N))
+            self.feature_weights = np.zeros((row + 1, _N_FEATURES))
+        self.seeds[row] = value
+        self._active[row] = True
+        self._features[row] = basis == "feature_points"
+        self._has_features = bool(self._features.any())
+        return row
+
+    def remove_character(self, row: int) -> None:
+        """Free ``row``: its state is dropped, its frame is zeros, and the next :meth:`add_character` reuses it."""
+        index = int(self._rows(row)[0]) if isinstance(row, int | np.integer) else None
+        if index is None:
+            raise InvalidValueError("row", row, "one active row index (int)")
+        rows = np.array([index])
+        self.facs.reset_rows(rows)
+        self.emotions.reset_rows(rows)
+        self.idle.reset_rows(rows, np.array([0]), None, self.time_s)
+        self._laughs.pop(index, None)
+        self._active[index] = False
+        self._features[index] = False
+        self._has_features = bool(self._features.any())
+        self._frames[index] = 0.0
+        self.feature_weights[index] = 0.0
+        self._free.append(index)
+        self._free.sort()
+
+    def _rows(self, rows: RowIndex) -> np.ndarray:
+        """``rows`` as an int array of active rows, or :class:`InvalidValueError`."""
+        n = self.n_characters
+        try:
+            if isinstance(rows, slice):
+                ids = np.arange(n)[rows]
+            else:
+                ids = np.atleast_1d(np.asarray(rows))
+                if ids.dtype.kind not in "iu" or ids.ndim != 1:
+                    raise TypeError
+        except (TypeError, ValueError):
+            raise InvalidValueError("rows", rows, "an int, a slice or an int array of character rows") from None
+        if ids.size and (ids.min() < 0 or ids.max() >= n or not self._active[ids].all()):
+            raise InvalidValueError("rows", rows, f"active rows (see active_rows(): {self.active_rows().tolist()})")
+        if isinstance(rows, slice):
+            ids = ids[self._active[ids]]
+        return ids.astype(np.intp)
+
+    # ------------------------------------------------------------------ commands
+
+    def set_aus(self, rows: RowIndex, intensities: Mapping[str, float], replace: bool = True) -> None:
+        """Hold the AUs of an OpenFACS message: ``{"AU12": 3.0, "L4": 1.0, ...}``, intensities 0..5.
+
+        With ``replace`` (a full-state message) every AU not given goes to 0.
+        """
+        self.facs.set_many(self._rows(rows), intensities, replace=replace)
+
+    def set_au(
+        self, rows: RowIndex, au: str | AUSpec, intensity: float | None = None, tau_s: float | None = None
+    ) -> None:
+        """Hold ``au`` (``"AU12"``, ``"L12C"``...) at ``intensity`` 0..5; ``tau_s`` its time constant (0 jumps)."""
+        self.facs.set(self._rows(rows), au, intensity, tau_s)
+
+    def set_speed(self, rows: RowIndex, speed: float, au: str | None = None) -> None:
+        """OpenFACS Speed (fraction per tick at :attr:`tick_hz`, 0..1) of every AU channel, or of ``au``.
+
+        Converted to a time constant, so the motion is the same at any step rate: each rendered frame of
+        OpenFACS moves a morph ``Lerp(current, target, Speed)``; 0.05 at 60 Hz reaches 95% in ~0.97 s.
+        """
+        self.facs.set_speed(self._rows(rows), speed, au)
+
+    def play_au(
+        self,
+        rows: RowIndex,
+        au: str | AUSpec,
+        intensity: float | None = None,
+        onset_s: float = 0.4,
+        apex_s: float = 0.3,
+        offset_s: float = 0.3,
+        start_s: float | None = None,
+    ) -> TimedAction:
+        """Play an AU once with an onset/apex/offset envelope (seconds), starting now or at ``start_s``."""
+        return self.facs.play(self._rows(rows), au, intensity, start_s, onset_s, apex_s, offset_s)
+
+    def emote(
+        self,
+        rows: RowIndex,
+        emotion_or_blend: str | Blend,
+        intensity: float = 1.0,
+        t_s: float | None = None,
+        envelope: Envelope | None = None,
+    ) -> None:
+        """Trigger an emotion or blend event (intensity 0..5, 1 = the prototype) at ``t_s`` (default: now)."""
+        self.emotions.trigger(
+            self._rows(rows), emotion_or_blend, intensity, self.time_s if t_s is None else t_s, envelope
+        )
+
+    def set_pad(
+        self, rows: RowIndex, pleasure: float, arousal: float, dominance: float, t_s: float | None = None
+    ) -> None:
+        """Move the PAD state (each factor in [-1, 1]) at ``t_s`` (default: now); the rows' emotion follows it."""
+        self.emotions.set_pad(self._rows(rows), pleasure, arousal, dominance, self.time_s if t_s is None else t_s)
+
+    def set_mood(self, rows: RowIndex, mood: Mapping[str, float] | np.ndarray) -> None:
+        """Set the mood: a (6,) vector (EMOTIONS order) or ``{emotion or blend: intensity}``."""
+        self.emotions.set_mood(self._rows(rows), _mood_vector(mood))
+
+    def laugh(
+        self,
+        rows: RowIndex,
+        laugh_type: str,
+        intensity: float = 1.0,
+        start_s: float | None = None,
+        seed: int | None = None,
+        duration_s: float | None = None,
+    ) -> Clip:
+        """Play a laugh or smile (one of the 13 types) on ``rows``; returns the face clip of the first row.
+
+        Each row's laugh is generated with ``seed`` (default: the row's seed). The laugh drives the mouth.
+        """
+        from mien.laughter.generator import generate
+
+        ids = self._rows(rows)
+        if seed is not None:
+            _check_seed(seed)
+        row_seeds = [int(self.seeds[row]) if seed is None else int(seed) for row in ids.tolist()]
+        clips: dict[int, Clip] = {}
+        for row_seed in row_seeds or [0 if seed is None else int(seed)]:
+            if row_seed not in clips:
+                result = generate(laugh_type, intensity=intensity, duration_s=duration_s, seed=row_seed)
+                clips[row_seed] = _face_clip(result.face_clip)
+        for row, row_seed in zip(ids.tolist(), row_seeds, strict=True):
+            self._start_clip(row, clips[row_seed], start_s)
+        return next(iter(clips.values()))
+
+    def play_clip(self, rows: RowIndex, clip: Clip, start_s: float | None = None) -> None:
+        """Add a face clip (channels ⊂ FACE_CHANNELS: a laugh, an imported performance) as a layer on ``rows``."""
+        ids = self._rows(rows)
+        face = _face_clip(clip)
+        for row in ids.tolist():
+            self._start_clip(row, face, start_s)
+
+    def _start_clip(self, row: int, clip: Clip, start_s: float | None) -> None:
+        start = self.time_s if start_s is None else float(start_s)
+        if not math.isfinite(start):
+            raise InvalidValueError("start_s", start_s, "a finite time in seconds")
+        self._laughs.setdefault(row, []).append(_ActiveLaugh(start, clip))
+
+    # ------------------------------------------------------------------ output
+
+    def step(self, t_s: float) -> np.ndarray:
+        """(n, 62) face frames at ``t_s`` (>= the previous time); the array is reused by the next step.
+
+        Freed rows are zeros. With a ``"feature_points"`` row, :attr:`feature_weights` holds its (54,)
+        feature weights for this step.
+        """
+        try:
+            t = float(t_s)
+        except (TypeError, ValueError):
+            raise InvalidValueError("t_s", t_s, "a time in seconds") from None
+        if not math.isfinite(t) or not t >= self.time_s:
+            raise InvalidValueError("t_s", t_s, f"a finite time >= the previous time {self.time_s}")
+        frames = self._frames
+        frames[:] = self.facs.advance(t)
+        self._t_s = t
+        emotions = self.emotions
+        emotion = emotions.advance(t)
+        if not emotions.quiet or emotion.any() or emotions.mood.any():
+            emotion, shown = emotions.expressed(t)
+            expression = np.einsum("ne,ec->nc", emotion, self._basis, out=self._expression)
+            expression += np.einsum("ne,ec->nc", shown, self._mood_basis, out=self._mood_expression)
+            if self._has_features:
+                features = self._features
+                np.einsum("ne,ec->nc", emotion, self._fp_basis, out=self.feature_weights)
+                self.feature_weights += np.einsum("ne,ec->nc", shown, self._fp_mood_basis)
+                self.feature_weights[~features] = 0.0
+                expression[features] = 0.0
+            frames += saturate(expression)
+        elif self._has_features:
+            self.feature_weights[:] = 0.0
+        laughing = None
+        if self._laughs:
+            laughing = np.zeros(self.n_characters, bool)
+            for row, laughs in list(self._laughs.items()):
+                for laugh in laughs:
+                    if laugh.start_s <= t < laugh.end_s:
+                        frames[row] += laugh.sample(t)
+                        laughing[row] = True
+                alive = [laugh for laugh in laughs if t < laugh.end_s]
+                if alive:
+                    self._laughs[row] = alive
+                else:
+                    del self._laughs[row]
+        # idle mouth motion yields to a laughing mouth, and in proportion to other mouth activity
+        mouth_scale = np.maximum(0.0, 1.0 - frames[:, _MOUTH].max(axis=1, initial=0.0) / 2.0)
+        if laughing is not None:
+            mouth_scale[laughing] = 0.0
+        self.idle.apply(t, frames, mouth_scale)
+        np.clip(frames[:, :_N_AU], 0.0, 5.0, out=frames[:, :_N_AU])
+        if self._free:
+            frames[self._free] = 0.0
+        return frames
+
+    def snapshot(self, row: int) -> dict[str, Any]:
+        """A plain dict of ``row``'s last frame (channel -> value), for servers and logs."""
+        index = int(self._rows(row)[0]) if isinstance(row, int | np.integer) else None
+        if index is None:
+            raise InvalidValueError("row", row, "one active row index (int)")
+        return dict(zip(FACE_CHANNELS, self._frames[index].tolist(), strict=True))
+
+
 class Character:
-    """One animated face. Give it commands, then call :meth:`step` with increasing times.
+    """One animated face: a :class:`CharacterBatch` of one row. Give it commands, then :meth:`step`.
 
     >>> c = Character(seed=1, idle=False)
     >>> c.emote("joy", 1.0)
@@ -89,52 +458,47 @@ class Character:
         mood_gain: float = 1.0,
         tick_hz: float = 60.0,
     ) -> None:
-        if expression_basis not in EXPRESSION_BASES:
-            raise InvalidValueError("expression_basis", expression_basis, f"one of {', '.join(EXPRESSION_BASES)}")
-        self.seed = int(seed)
+        from mien.affect.engine import MODES
+
+        if emotion_mode not in MODES:
+            raise InvalidValueError("emotion_mode", emotion_mode, f"one of {', '.join(MODES)}")
+        self.seed = _check_seed(seed)
         """Seed of the idle behaviour (and default seed of laughter)."""
-        self.expression_basis = expression_basis
+        self.expression_basis = _check_basis(expression_basis)
         """``"facs"`` or ``"feature_points"``."""
-        self.facs = FacsEngine(tick_hz=tick_hz)
-        """The FACS layer."""
-        self.emotions = EmotionEngine(
-            mode=emotion_mode, envelope=envelope, mood_time_constant_s=mood_time_constant_s, mood_gain=mood_gain
+        self.emotion_mode = emotion_mode
+        """``"categorical"`` or ``"pad"`` (:meth:`set_pad` only in ``"pad"``)."""
+        self.batch = CharacterBatch(
+            0, envelope=envelope, mood_time_constant_s=mood_time_constant_s, mood_gain=mood_gain, tick_hz=tick_hz
         )
-        """The emotion layer (Broekens)."""
-        settings = _idle_settings(idle)
-        self.idle: Idle | None = Idle(self.seed, settings) if settings is not None else None
-        """The idle layer, or None when switched off."""
-        if expression_basis == "facs":
-            self._basis, self._mood_basis = facs_basis(), facs_basis(closed_mouth=True)
-        else:
-            self._basis, self._mood_basis = feature_point_basis(), feature_point_basis(closed_mouth=True)
-        self.feature_weights = np.zeros(feature_point_basis().shape[1])
-        """(54,) feature-point target weights (metres) of the last step (``"feature_points"`` basis only)."""
+        """The one-row batch that does the work."""
+        self.batch.add_character(self.seed, idle, expression_basis)
         self.last_feature_weights: np.ndarray | None = None
         """(n_frames, 54) feature weights of the last :meth:`run` (``"feature_points"`` basis only)."""
-        self._laughs: list[_ActiveLaugh] = []
-        self._frame = np.zeros(_N)
-        self._emotion = np.zeros(6)
-        self._mood = np.zeros(6)
-        self._expression = np.zeros(self._basis.shape[1])
-        self._mood_expression = np.zeros(self._basis.shape[1])
-        self._mouth = _mouth_channel_ids()
-        self._t_s = 0.0
 
     @property
     def time_s(self) -> float:
         """Time of the last :meth:`step`, seconds."""
-        return self._t_s
+        return self.batch.time_s
+
+    @property
+    def feature_weights(self) -> np.ndarray:
+        """(54,) feature-point target weights (metres) of the last step (``"feature_points"`` basis only)."""
+        return self.batch.feature_weights[0]
 
     # ------------------------------------------------------------------ commands
 
     def set_au(self, au: str | AUSpec, intensity: float | None = None, tau_s: float | None = None) -> None:
-        """Hold an AU (``"AU12"``, ``"L12C"``...) at ``intensity`` 0..5 (see :meth:`FacsEngine.set`)."""
-        self.facs.set(au, intensity, tau_s)
+        """Hold an AU (``"AU12"``, ``"L12C"``...) at ``intensity`` 0..5; ``tau_s`` its time constant."""
+        self.batch.set_au(0, au, intensity, tau_s)
 
     def set_aus(self, intensities: Mapping[str, float], speed: float | None = None, replace: bool = False) -> None:
         """Hold several AUs; ``speed`` is OpenFACS's per-tick Speed; ``replace`` zeroes the AUs not named."""
-        self.facs.set_many(intensities, speed=speed, replace=replace)
+        self.batch.facs.set_many(0, intensities, speed=speed, replace=replace)
+
+    def set_speed(self, speed: float, au: str | None = None) -> None:
+        """OpenFACS Speed (per tick at the nominal rate) of every AU channel, or of ``au``."""
+        self.batch.set_speed(0, speed, au)
 
     def play_au(
         self,
@@ -146,7 +510,7 @@ class Character:
         start_s: float | None = None,
     ) -> TimedAction:
         """Play an AU once with an onset/apex/offset envelope, starting now or at ``start_s``."""
-        return self.facs.play(au, intensity, start_s if start_s is not None else self._t_s, onset_s, apex_s, offset_s)
+        return self.batch.play_au(0, au, intensity, onset_s, apex_s, offset_s, start_s)
 
     def emote(
         self,
@@ -156,21 +520,19 @@ class Character:
         envelope: Envelope | None = None,
     ) -> None:
         """Trigger an emotion or blend event (intensity 0..5, 1 = the prototype) now or at ``start_s``."""
-        self.emotions.trigger(emotion, intensity, self._t_s if start_s is None else start_s, envelope)
+        self.batch.emote(0, emotion, intensity, start_s, envelope)
 
     def set_pad(self, pleasure: float, arousal: float, dominance: float) -> None:
         """Move the PAD state (each in [-1, 1]; needs ``emotion_mode="pad"``)."""
-        self.emotions.set_pad(pleasure, arousal, dominance, self._t_s)
+        if self.emotion_mode != "pad":
+            raise InvalidValueError(
+                "emotion_mode", self.emotion_mode, "'pad' to use set_pad (Character(emotion_mode='pad'))"
+            )
+        self.batch.set_pad(0, pleasure, arousal, dominance)
 
     def set_mood(self, mood: Mapping[str, float] | np.ndarray) -> None:
         """Set the mood: a (6,) vector or ``{emotion: intensity}``."""
-        if isinstance(mood, Mapping):
-            vector = np.zeros(6)
-            for name, value in mood.items():
-                for index, weight in blend_components(name):
-                    vector[index] += weight * check_intensity(value, f"mood[{name}]")
-            mood = vector
-        self.emotions.set_mood(mood)
+        self.batch.set_mood(0, mood)
 
     def laugh(
         self,
@@ -181,50 +543,17 @@ class Character:
         start_s: float | None = None,
     ) -> Clip:
         """Play a laugh or smile (one of the 13 types); returns its face clip. The laugh drives the mouth."""
-        from mien.laughter.generator import generate
-
-        result = generate(
-            laugh_type, intensity=intensity, duration_s=duration_s, seed=self.seed if seed is None else seed
-        )
-        self.play_clip(result.face_clip, start_s)
-        return result.face_clip
+        return self.batch.laugh(0, laugh_type, intensity, start_s=start_s, seed=seed, duration_s=duration_s)
 
     def play_clip(self, clip: Clip, start_s: float | None = None) -> None:
         """Add a face clip (channels ⊂ FACE_CHANNELS, e.g. a laugh or an imported performance) as a layer."""
-        if clip.channels != FACE_CHANNELS:
-            values = np.zeros((clip.n_frames, _N))
-            for j, name in enumerate(clip.channels):
-                values[:, FACE_CHANNELS.index(name)] = clip.values[:, j]
-            clip = Clip(values, clip.fps, FACE_CHANNELS)
-        self._laughs.append(_ActiveLaugh(self._t_s if start_s is None else float(start_s), clip))
+        self.batch.play_clip(0, clip, start_s)
 
     # ------------------------------------------------------------------ output
 
     def step(self, t_s: float) -> np.ndarray:
         """The (62,) face frame at ``t_s`` (>= the previous time). The array is reused by the next step."""
-        frame = self._frame
-        frame[:] = self.facs.advance(t_s)
-        self._t_s = t_s
-        emotion, mood = self.emotions.expressed(t_s, self._emotion, self._mood)
-        expression = np.dot(emotion, self._basis, out=self._expression)
-        expression += np.dot(mood, self._mood_basis, out=self._mood_expression)
-        if self.expression_basis == "facs":
-            frame += saturate(expression)
-        else:
-            self.feature_weights[:] = expression
-        laughing = False
-        if self._laughs:
-            for laugh in self._laughs:
-                if laugh.start_s <= t_s < laugh.end_s:
-                    frame += laugh.sample(t_s)
-                    laughing = True
-            self._laughs = [laugh for laugh in self._laughs if t_s < laugh.end_s]
-        # idle mouth motion yields to a laughing mouth, and in proportion to other mouth activity
-        mouth_scale = 0.0 if laughing else max(0.0, 1.0 - float(frame[self._mouth].max()) / 2.0)
-        if self.idle is not None:
-            self.idle.apply(t_s, frame, mouth_scale)
-        np.clip(frame[:_N_AU], 0.0, 5.0, out=frame[:_N_AU])
-        return frame
+        return self.batch.step(t_s)[0]
 
     def run(self, duration_s: float, fps: float = 60.0) -> Clip:
         """Step from the current time for ``duration_s`` at ``fps`` and return the frames as a :class:`Clip`.
@@ -236,9 +565,9 @@ class Character:
         if not (math.isfinite(fps) and fps > 0):
             raise InvalidValueError("fps", fps, "a positive frame rate")
         n_frames = max(1, round(duration_s * fps))
-        start = self._t_s
+        start = self.time_s
         values = np.empty((n_frames, _N))
-        features = np.empty((n_frames, self.feature_weights.shape[0])) if self.expression_basis != "facs" else None
+        features = np.empty((n_frames, _N_FEATURES)) if self.expression_basis != "facs" else None
         for i in range(n_frames):
             values[i] = self.step(start + i / fps)
             if features is not None:
@@ -248,174 +577,4 @@ class Character:
 
     def snapshot(self) -> dict[str, Any]:
         """A plain dict of the current frame (channel -> value), for servers and logs."""
-        return dict(zip(FACE_CHANNELS, self._frame.tolist(), strict=True))
-
-
-class CharacterBatch:
-    """Many characters stepped together with vectorised numpy (one seed each).
-
-    Supports what crowds need: held AU targets with time constants, emotion and blend events with
-    envelopes, mood and idle behaviour, with the same results as single :class:`Character` objects given
-    the same seeds and commands (to float rounding). Timed AU actions, PAD mode, laughter and the
-    feature-point basis are single-character features.
-    """
-
-    def __init__(
-        self,
-        seeds: np.ndarray | int,
-        idle: IdleSettings | bool = True,
-        envelope: Envelope | None = None,
-        mood_time_constant_s: float = 10.0,
-        mood_gain: float = 1.0,
-        mood_max_step_s: float = 0.05,
-        tick_hz: float = 60.0,
-    ) -> None:
-        seeds_array = np.arange(seeds) if isinstance(seeds, int) else np.asarray(seeds)
-        self.seeds = seeds_array.astype(np.int64)
-        """(n,) seeds."""
-        n = self.seeds.shape[0]
-        self.tick_hz = float(tick_hz)
-        self.envelope = envelope or Envelope()
-        self.mood_time_constant_s = float(mood_time_constant_s)
-        self.mood_gain = float(mood_gain)
-        self.mood_max_step_s = float(mood_max_step_s)
-        settings = _idle_settings(idle)
-        self.idle = IdleBatch(self.seeds, settings) if settings is not None else None
-        single = FacsEngine(tick_hz=tick_hz)
-        self.target = np.zeros((n, _N))
-        """(n, 62) held targets."""
-        self.current = np.zeros((n, _N))
-        """(n, 62) smoothed FACS state."""
-        self.tau_s = np.tile(single.tau_s, (n, 1))
-        """(n, 62) time constants, seconds."""
-        self._decay = np.zeros((n, _N))
-        self._decay_dt = -1.0
-        self._capacity = 4
-        self._ev_start = np.full((n, self._capacity), np.inf)
-        self._ev_onset = np.ones((n, self._capacity))
-        self._ev_hold = np.zeros((n, self._capacity))
-        self._ev_decay = np.ones((n, self._capacity))
-        self._ev_amount = np.zeros((n, self._capacity, 6))
-        self._mood = np.zeros((n, 6))
-        self._emotion = np.zeros((n, 6))
-        self._basis = facs_basis()
-        self._mood_basis = facs_basis(closed_mouth=True)
-        self._frames = np.zeros((n, _N))
-        self._mouth = _mouth_channel_ids()
-        self._t_s: float | None = None
-
-    @property
-    def n_characters(self) -> int:
-        """Number of characters."""
-        return int(self.seeds.shape[0])
-
-    def set_au(
-        self, characters: np.ndarray | slice | int, au: str, intensity: float, tau_s: float | None = None
-    ) -> None:
-        """Hold ``au`` at ``intensity`` on the selected characters (index array, slice or int)."""
-        spec = parse_au(au)
-        probe = FacsEngine(tick_hz=self.tick_hz)
-        probe.set(spec, intensity, tau_s)  # validates and converts head/eye codes to degrees
-        channels = np.array(au_channels(spec.code, spec.side))
-        rows = np.atleast_1d(np.arange(self.n_characters)[characters])[:, None]
-        self.target[rows, channels] = probe.target[channels]
-        if tau_s is not None:
-            self.tau_s[rows, channels] = probe.tau_s[channels]
-            self._decay_dt = -1.0
-
-    def set_speed(self, characters: np.ndarray | slice | int, speed: float) -> None:
-        """OpenFACS Speed (per tick at the nominal rate) for every AU channel of the selected characters."""
-        self.tau_s[characters, :_N_AU] = time_constant_from_speed(speed, self.tick_hz)
-        self._decay_dt = -1.0
-
-    def emote(
-        self,
-        characters: np.ndarray | slice | int,
-        emotion: str | Blend,
-        intensity: float,
-        t_s: float,
-        envelope: Envelope | None = None,
-    ) -> None:
-        """Trigger an emotion event on the selected characters at ``t_s``."""
-        value = check_intensity(intensity)
-        env = envelope or self.envelope
-        amounts = np.zeros(6)
-        for index, weight in blend_components(emotion):
-            amounts[index] += weight * value
-        rows = np.arange(self.n_characters)[characters]
-        rows = np.atleast_1d(rows)
-        free = ~np.isfinite(self._ev_start[rows]) | (self._ev_start[rows] + self._ev_total()[rows] <= (self._t_s or -1))
-        if not free.any(axis=1).all():
-            self._grow()
-            free = ~np.isfinite(self._ev_start[rows])
-        slots = free.argmax(axis=1)
-        self._ev_start[rows, slots] = float(t_s)
-        self._ev_onset[rows, slots] = env.onset_s
-        self._ev_hold[rows, slots] = env.hold_s
-        self._ev_decay[rows, slots] = env.decay_s
-        self._ev_amount[rows, slots] = amounts
-
-    def _ev_total(self) -> np.ndarray:
-        return self._ev_onset + self._ev_hold + self._ev_decay
-
-    def _grow(self) -> None:
-        extra = self._capacity
-        n = self.n_characters
-        self._ev_start = np.concatenate([self._ev_start, np.full((n, extra), np.inf)], axis=1)
-        self._ev_onset = np.concatenate([self._ev_onset, np.ones((n, extra))], axis=1)
-        self._ev_hold = np.concatenate([self._ev_hold, np.zeros((n, extra))], axis=1)
-        self._ev_decay = np.concatenate([self._ev_decay, np.ones((n, extra))], axis=1)
-        self._ev_amount = np.concatenate([self._ev_amount, np.zeros((n, extra, 6))], axis=1)
-        self._capacity += extra
-
-    def _emotion_at(self, t_s: float) -> np.ndarray:
-        levels = envelope_values(t_s - self._ev_start, self._ev_onset, self._ev_hold, self._ev_decay)
-        emotion = np.einsum("nk,nke->ne", levels, self._ev_amount)
-        np.minimum(emotion, 5.0, out=emotion)
-        return emotion
-
-    def _advance_affect(self, t_s: float) -> None:
-        last = self._t_s
-        if last is None or t_s == last:
-            self._emotion = self._emotion_at(t_s)
-            return
-        dt = t_s - last
-        n_steps = math.ceil(dt / self.mood_max_step_s) if dt > self.mood_max_step_s else 1
-        step = dt / n_steps
-        previous = self._emotion
-        for s in range(1, n_steps + 1):
-            current = self._emotion_at(t_s if s == n_steps else last + s * step)
-            mood_step(self._mood, previous, current, step, self.mood_time_constant_s, self.mood_gain)
-            previous = current
-        self._emotion = previous
-        finished = self._ev_start + self._ev_total() <= t_s
-        if finished.any():
-            self._ev_start[finished] = np.inf
-
-    def step(self, t_s: float) -> np.ndarray:
-        """(n, 62) face frames at ``t_s`` (>= the previous time); the array is reused by the next step."""
-        last = self._t_s
-        dt = t_s - (0.0 if last is None else last)  # the FACS layer starts at t = 0, like Character's
-        if not dt >= 0.0:
-            raise InvalidValueError("t_s", t_s, f"a time >= the previous time {last}")
-        if dt > 0.0:
-            if dt != self._decay_dt:
-                with np.errstate(divide="ignore", invalid="ignore"):
-                    np.exp(-dt / self.tau_s, out=self._decay)
-                np.nan_to_num(self._decay, copy=False, nan=0.0)
-                self._decay_dt = dt
-            self.current -= self.target
-            self.current *= self._decay
-            self.current += self.target
-        self._advance_affect(t_s)
-        self._t_s = t_s
-        frames = self._frames
-        np.dot(self._emotion, self._basis, out=frames)
-        frames += np.dot(shown_mood(self._emotion, self._mood), self._mood_basis)
-        saturate(frames)  # the emotion layer only: the FACS layer is added after
-        frames += self.current
-        if self.idle is not None:
-            mouth = frames[:, self._mouth].max(axis=1)
-            self.idle.apply(t_s, frames, np.maximum(0.0, 1.0 - mouth / 2.0))
-        np.clip(frames[:, :_N_AU], 0.0, 5.0, out=frames[:, :_N_AU])
-        return frames
+        return self.batch.snapshot(0)

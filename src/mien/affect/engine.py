@@ -25,39 +25,28 @@ Time
     the latest time queried have been pruned. An event triggered in the past enters the mood only from the
     latest time on.
 
-Per-frame cost is a few microseconds for a handful of events: plain Python floats, no array rebuilding; pass
-``out=`` arrays to avoid even the small (6,) allocations.
+One implementation: :class:`EmotionBatch` steps n characters (rows) with vectorised numpy; one character's
+:class:`EmotionEngine` is a batch of one.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from mien.affect.emotions import EMOTIONS, MAX_INTENSITY, Blend, blend_components, check_intensity
-from mien.affect.envelope import Envelope, envelope_value
-from mien.affect.pad import PAD_RADIUS, check_pad, pad_intensities
+from mien.affect.envelope import Envelope, envelope_values
+from mien.affect.pad import PAD_PROTOTYPES, PAD_RADIUS, check_pad, pad_intensities
 from mien.errors import InvalidValueError
+from mien.facs.dynamics import RowIndex
 
-__all__ = ["MODES", "EmotionEngine", "mood_step", "shown_mood"]
+__all__ = ["MODES", "EmotionBatch", "EmotionEngine", "mood_step", "shown_mood"]
 
 MODES: tuple[str, ...] = ("categorical", "pad")
 """Emotion representations: a vector of emotion intensities, or a PAD factor state."""
 
 _N = len(EMOTIONS)
-_ZERO: list[float] = [0.0] * _N  # shared, never mutated
-
-
-@dataclass(slots=True)
-class _Event:
-    start_s: float
-    onset_s: float
-    hold_s: float
-    decay_s: float
-    end_s: float
-    amounts: tuple[tuple[int, float], ...]  # (emotion index, intensity * blend weight)
 
 
 def _finite(field: str, value: object) -> float:
@@ -70,15 +59,283 @@ def _finite(field: str, value: object) -> float:
     return v
 
 
-def _write(values: list[float], out: np.ndarray | None) -> np.ndarray:
+def _write(values: np.ndarray, out: np.ndarray | None) -> np.ndarray:
     if out is None:
-        return np.array(values)
+        return values.copy()
     out[...] = values
     return out
 
 
+_PAD_UNIT = PAD_PROTOTYPES / np.linalg.norm(PAD_PROTOTYPES, axis=1, keepdims=True)  # (6, 3)
+_PAD_NORM = np.linalg.norm(PAD_PROTOTYPES, axis=1)  # (6,)
+
+
+def _pad_intensities_rows(pad: np.ndarray, radius: float) -> np.ndarray:
+    """(k, 6) intensities of (k, 3) PAD states: :func:`~mien.affect.pad.pad_intensities` over rows."""
+    length = np.sqrt(np.einsum("kf,kf->k", pad, pad))[:, None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        unit = pad / length
+    diff = unit[:, None, :] - _PAD_UNIT[None, :, :]
+    dist = np.sqrt(np.einsum("kef,kef->ke", diff, diff))
+    out = np.where(dist < radius, length / _PAD_NORM * (1.0 - dist / radius), 0.0)
+    out[length[:, 0] == 0.0] = 0.0
+    return out
+
+
+class EmotionBatch:
+    """The emotion layer of n characters (rows): events, PAD factor states and moods, vectorised.
+
+    Rows are characters; ``rows`` arguments index the first axis (an int, a slice or an int array; callers
+    validate them). Time semantics are those of the module doc: :meth:`advance` with non-decreasing times
+    integrates the mood; an earlier time gives the emotion then without rewinding. A row is in PAD mode
+    from its first :meth:`set_pad` on (its emotion is the PAD state's intensities, events add on top).
+
+    >>> batch = EmotionBatch(2)
+    >>> batch.trigger(1, "joy", 1.0, t_s=0.0)
+    >>> batch.advance(0.2)[:, 0].round(3).tolist()      # half-way through row 1's onset
+    [0.0, 0.5]
+    """
+
+    def __init__(
+        self,
+        n_rows: int = 0,
+        envelope: Envelope | None = None,
+        mood_time_constant_s: float = 10.0,
+        mood_gain: float = 1.0,
+        *,
+        pad_radius: float = PAD_RADIUS,
+        mood_max_step_s: float = 0.05,
+    ) -> None:
+        """Create ``n_rows`` neutral rows; the other parameters are those of :class:`EmotionEngine`."""
+        if envelope is not None and not isinstance(envelope, Envelope):
+            raise InvalidValueError("envelope", envelope, "an Envelope")
+        tau = _finite("mood_time_constant_s", mood_time_constant_s)
+        if tau <= 0.0:
+            raise InvalidValueError("mood_time_constant_s", mood_time_constant_s, "a finite number > 0")
+        gain = _finite("mood_gain", mood_gain)
+        if gain < 0.0:
+            raise InvalidValueError("mood_gain", mood_gain, "a finite number >= 0")
+        radius = _finite("pad_radius", pad_radius)
+        if not (0.0 < radius <= 2.0):
+            raise InvalidValueError("pad_radius", pad_radius, "a number in (0, 2]")
+        step = _finite("mood_max_step_s", mood_max_step_s)
+        if step <= 0.0:
+            raise InvalidValueError("mood_max_step_s", mood_max_step_s, "a finite number > 0")
+        self.envelope = envelope if envelope is not None else Envelope()
+        """Default envelope of events."""
+        self.mood_time_constant_s = tau
+        """Time constant of the mood's exponential moving average, seconds."""
+        self.mood_gain = gain
+        """Mood's steady state per unit of sustained emotion."""
+        self.pad_radius = radius
+        """Reach of a PAD prototype (chord distance of directions)."""
+        self.mood_max_step_s = step
+        """Longest mood integration step, seconds."""
+        self.mood = np.zeros((n_rows, _N))
+        """(n, 6) mood of each row at the latest time advanced to."""
+        self._emotion = np.zeros((n_rows, _N))  # emotion at _t_s
+        self._t_s: float | None = None
+        self._dirty = False
+        # events: one row each in parallel arrays
+        self._ev_row = np.zeros(0, np.int64)
+        self._ev_time = np.zeros((0, 5))  # start_s, onset_s, hold_s, decay_s, end_s
+        self._ev_amount = np.zeros((0, _N))
+        # PAD: linear ramp from _pad_from (at _pad_t0_s) to _pad_to over _pad_ramp_s, per row
+        self._pad_on = np.zeros(n_rows, bool)
+        self._pad_from = np.zeros((n_rows, 3))
+        self._pad_to = np.zeros((n_rows, 3))
+        self._pad_t0_s = np.zeros(n_rows)
+        self._pad_ramp_s = np.zeros(n_rows)
+        self._pad_settled = np.zeros((n_rows, _N))
+
+    @property
+    def n_rows(self) -> int:
+        """Number of rows."""
+        return int(self.mood.shape[0])
+
+    @property
+    def time_s(self) -> float | None:
+        """Latest time advanced to (None before the first :meth:`advance`)."""
+        return self._t_s
+
+    def add_rows(self, count: int) -> None:
+        """Append ``count`` neutral rows."""
+        self.mood = np.concatenate([self.mood, np.zeros((count, _N))])
+        self._emotion = np.concatenate([self._emotion, np.zeros((count, _N))])
+        self._pad_on = np.concatenate([self._pad_on, np.zeros(count, bool)])
+        self._pad_from = np.concatenate([self._pad_from, np.zeros((count, 3))])
+        self._pad_to = np.concatenate([self._pad_to, np.zeros((count, 3))])
+        self._pad_t0_s = np.concatenate([self._pad_t0_s, np.zeros(count)])
+        self._pad_ramp_s = np.concatenate([self._pad_ramp_s, np.zeros(count)])
+        self._pad_settled = np.concatenate([self._pad_settled, np.zeros((count, _N))])
+
+    def reset_rows(self, rows: np.ndarray) -> None:
+        """Forget the events, PAD state and mood of ``rows``."""
+        for array in (self.mood, self._emotion, self._pad_from, self._pad_to, self._pad_settled):
+            array[rows] = 0.0
+        self._pad_on[rows] = False
+        self._pad_t0_s[rows] = 0.0
+        self._pad_ramp_s[rows] = 0.0
+        if self._ev_row.size:
+            self._keep_events(~np.isin(self._ev_row, np.atleast_1d(rows)))
+
+    def _keep_events(self, keep: np.ndarray) -> None:
+        self._ev_row = self._ev_row[keep]
+        self._ev_time = self._ev_time[keep]
+        self._ev_amount = self._ev_amount[keep]
+
+    # ---------------------------------------------------------------- input
+
+    def trigger(
+        self,
+        rows: RowIndex,
+        emotion: str | Blend,
+        intensity: float,
+        t_s: float,
+        envelope: Envelope | None = None,
+    ) -> None:
+        """Start an event on ``rows``: ``emotion`` (a name, alias, blend name or :class:`Blend`) at ``t_s``.
+
+        ``intensity`` in [0, 5]: 1 is the prototype. ``envelope`` overrides the default for this event.
+        Bad values raise :class:`~mien.errors.InvalidValueError` (:class:`~mien.errors.UnknownNameError`
+        for names).
+        """
+        amounts = np.zeros(_N)
+        components = blend_components(emotion)
+        value = check_intensity(intensity)
+        start = _finite("t_s", t_s)
+        if envelope is not None and not isinstance(envelope, Envelope):
+            raise InvalidValueError("envelope", envelope, "an Envelope")
+        for index, weight in components:
+            amounts[index] += weight * value
+        env = envelope if envelope is not None else self.envelope
+        row_ids = np.atleast_1d(np.arange(self.n_rows)[rows])
+        times = (start, env.onset_s, env.hold_s, env.decay_s, start + env.total_s)
+        self._ev_row = np.concatenate([self._ev_row, row_ids])
+        self._ev_time = np.concatenate([self._ev_time, np.tile(times, (len(row_ids), 1))])
+        self._ev_amount = np.concatenate([self._ev_amount, np.tile(amounts, (len(row_ids), 1))])
+        self._dirty = True
+
+    def set_pad(self, rows: RowIndex, pleasure: float, arousal: float, dominance: float, t_s: float) -> None:
+        """Move the PAD state of ``rows`` (each factor in [-1, 1]), reached linearly over ``envelope.onset_s``.
+
+        The state is held until the next call (set ``(0, 0, 0)`` to let the emotion decay to the mood).
+        """
+        target = check_pad(pleasure, arousal, dominance)
+        start = _finite("t_s", t_s)
+        row_ids = np.atleast_1d(np.arange(self.n_rows)[rows])
+        self._pad_from[row_ids] = self._pad_rows(start, row_ids)
+        self._pad_to[row_ids] = target
+        self._pad_t0_s[row_ids] = start
+        self._pad_ramp_s[row_ids] = self.envelope.onset_s
+        self._pad_settled[row_ids] = pad_intensities(*target, radius=self.pad_radius)
+        self._pad_on[row_ids] = True
+        self._dirty = True
+
+    def set_mood(self, rows: RowIndex, mood: object) -> None:
+        """Set the mood of ``rows``: (6,) intensities, each finite in [0, 5]."""
+        try:
+            values = np.asarray(mood, dtype=np.float64).reshape(-1)
+        except (TypeError, ValueError):
+            raise InvalidValueError("mood", mood, f"{_N} intensities in [0, 5]") from None
+        if values.shape != (_N,):
+            raise InvalidValueError("mood", mood, f"{_N} intensities in [0, 5] ({', '.join(EMOTIONS)})")
+        checked = [check_intensity(v, f"mood[{name}]") for v, name in zip(values.tolist(), EMOTIONS, strict=True)]
+        self.mood[rows] = checked
+
+    # ---------------------------------------------------------------- output
+
+    def n_events(self, row: int | None = None) -> int:
+        """Number of events not yet pruned, of ``row`` or of every row."""
+        return int(self._ev_row.size if row is None else np.count_nonzero(self._ev_row == row))
+
+    def pad_at(self, t_s: float) -> np.ndarray:
+        """(n, 3) PAD factor states at ``t_s`` (zeros for rows never given one)."""
+        return self._pad_rows(_finite("t_s", t_s), np.arange(self.n_rows))
+
+    def _pad_rows(self, t_s: float, row_ids: np.ndarray) -> np.ndarray:
+        elapsed = (t_s - self._pad_t0_s[row_ids])[:, None]
+        ramp = self._pad_ramp_s[row_ids][:, None]
+        start, end = self._pad_from[row_ids], self._pad_to[row_ids]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            moving = start + (elapsed / ramp) * (end - start)
+        return np.where(elapsed >= ramp, end, np.where(elapsed <= 0.0, start, moving))
+
+    def emotion_at(self, t_s: float) -> np.ndarray:
+        """(n, 6) emotion intensities at ``t_s`` (a new array), capped at 5; the mood is not touched."""
+        emotion = np.zeros((self.n_rows, _N))
+        if self._pad_on.any():
+            rows = np.flatnonzero(self._pad_on)
+            settled = t_s - self._pad_t0_s[rows] >= self._pad_ramp_s[rows]
+            if settled.all():
+                emotion[rows] = self._pad_settled[rows]
+            else:
+                emotion[rows] = np.where(
+                    settled[:, None],
+                    self._pad_settled[rows],
+                    _pad_intensities_rows(self._pad_rows(t_s, rows), self.pad_radius),
+                )
+        if self._ev_row.size:
+            times = self._ev_time
+            levels = envelope_values(t_s - times[:, 0], times[:, 1], times[:, 2], times[:, 3])
+            levels[(times[:, 0] > t_s) | (t_s >= times[:, 4])] = 0.0
+            np.add.at(emotion, self._ev_row, levels[:, None] * self._ev_amount)
+            np.minimum(emotion, MAX_INTENSITY, out=emotion)
+        return emotion
+
+    @property
+    def quiet(self) -> bool:
+        """True when no row has an event or a PAD state (every emotion is 0; moods may not be)."""
+        return not self._ev_row.size and not self._pad_on.any()
+
+    def advance(self, t_s: float) -> np.ndarray:
+        """Move to ``t_s``: integrate the moods and return the (n, 6) emotions there (do not modify them).
+
+        An earlier time than the latest returns the emotions then, without rewinding the moods.
+        """
+        t = _finite("t_s", t_s)
+        last = self._t_s
+        if last is None:
+            self._t_s = t
+            self._emotion = self.emotion_at(t)
+            self._dirty = False
+            return self._emotion
+        if t < last:
+            return self.emotion_at(t)
+        if self._dirty:
+            self._emotion = self.emotion_at(last)
+            self._dirty = False
+        if t == last:
+            return self._emotion
+        dt = t - last
+        n_steps = math.ceil(dt / self.mood_max_step_s) if dt > self.mood_max_step_s else 1
+        step = dt / n_steps
+        if self.quiet and not self._emotion.any():
+            self.mood *= math.exp(-dt / self.mood_time_constant_s)  # no emotion: a plain decay
+        else:
+            previous = self._emotion
+            for s in range(1, n_steps + 1):
+                current = self.emotion_at(t if s == n_steps else last + s * step)
+                mood_step(self.mood, previous, current, step, self.mood_time_constant_s, self.mood_gain)
+                previous = current
+            self._emotion = previous
+        self._t_s = t
+        if self._ev_row.size:
+            alive = self._ev_time[:, 4] > t
+            if not alive.all():
+                self._keep_events(alive)
+        return self._emotion
+
+    def expressed(self, t_s: float) -> tuple[np.ndarray, np.ndarray]:
+        """``(emotion (n, 6), shown_mood (n, 6))`` to express at ``t_s`` (see :func:`shown_mood`)."""
+        emotion = self.advance(t_s)
+        return emotion, shown_mood(emotion, self.mood)
+
+
 class EmotionEngine:
     """Emotion events with onset/hold/decay envelopes, a mood that averages them, optional PAD factors.
+
+    One character's emotion layer: an :class:`EmotionBatch` of one row (one implementation of both).
 
     >>> engine = EmotionEngine()
     >>> engine.trigger("happy", 1.2, t_s=0.0)
@@ -110,46 +367,37 @@ class EmotionEngine:
         """
         if mode not in MODES:
             raise InvalidValueError("mode", mode, f"one of {', '.join(MODES)}")
-        if envelope is not None and not isinstance(envelope, Envelope):
-            raise InvalidValueError("envelope", envelope, "an Envelope")
-        tau = _finite("mood_time_constant_s", mood_time_constant_s)
-        if tau <= 0.0:
-            raise InvalidValueError("mood_time_constant_s", mood_time_constant_s, "a finite number > 0")
-        gain = _finite("mood_gain", mood_gain)
-        if gain < 0.0:
-            raise InvalidValueError("mood_gain", mood_gain, "a finite number >= 0")
-        radius = _finite("pad_radius", pad_radius)
-        if not (0.0 < radius <= 2.0):
-            raise InvalidValueError("pad_radius", pad_radius, "a number in (0, 2]")
-        step = _finite("mood_max_step_s", mood_max_step_s)
-        if step <= 0.0:
-            raise InvalidValueError("mood_max_step_s", mood_max_step_s, "a finite number > 0")
         self.mode = mode
         """``"categorical"`` or ``"pad"``."""
-        self.envelope = envelope if envelope is not None else Envelope()
+        self.batch = EmotionBatch(
+            1, envelope, mood_time_constant_s, mood_gain, pad_radius=pad_radius, mood_max_step_s=mood_max_step_s
+        )
+        """The one-row batch doing the work."""
+
+    @property
+    def envelope(self) -> Envelope:
         """Default envelope of events."""
-        self.mood_time_constant_s = tau
+        return self.batch.envelope
+
+    @property
+    def mood_time_constant_s(self) -> float:
         """Time constant of the mood's exponential moving average, seconds."""
-        self.mood_gain = gain
+        return self.batch.mood_time_constant_s
+
+    @property
+    def mood_gain(self) -> float:
         """Mood's steady state per unit of sustained emotion."""
-        self.pad_radius = radius
+        return self.batch.mood_gain
+
+    @property
+    def pad_radius(self) -> float:
         """Reach of a PAD prototype (chord distance of directions)."""
-        self.mood_max_step_s = step
+        return self.batch.pad_radius
+
+    @property
+    def mood_max_step_s(self) -> float:
         """Longest mood integration step, seconds."""
-        self._events: list[_Event] = []
-        self._next_end_s = math.inf
-        self._t_s: float | None = None  # latest time advanced to
-        self._emotion = [0.0] * _N  # emotion at _t_s
-        self._dirty = False  # an event or PAD change since _emotion was computed
-        self._mood = [0.0] * _N
-        self._last_dt_s = -1.0
-        self._last_k = 0.0
-        # PAD state: linear ramp from _pad_from (at _pad_t0_s) to _pad_to over _pad_ramp_s
-        self._pad_from = (0.0, 0.0, 0.0)
-        self._pad_to = (0.0, 0.0, 0.0)
-        self._pad_t0_s = 0.0
-        self._pad_ramp_s = 0.0
-        self._pad_settled = [0.0] * _N  # intensities of _pad_to
+        return self.batch.mood_max_step_s
 
     # ---------------------------------------------------------------- input
 
@@ -166,18 +414,7 @@ class EmotionEngine:
         ``envelope`` overrides the engine's default for this event. Bad values raise
         :class:`~mien.errors.InvalidValueError` (:class:`~mien.errors.UnknownNameError` for names).
         """
-        amounts = tuple((i, w) for i, w in blend_components(emotion))
-        value = check_intensity(intensity)
-        start = _finite("t_s", t_s)
-        if envelope is not None and not isinstance(envelope, Envelope):
-            raise InvalidValueError("envelope", envelope, "an Envelope")
-        env = envelope if envelope is not None else self.envelope
-        end = start + env.total_s
-        self._events.append(
-            _Event(start, env.onset_s, env.hold_s, env.decay_s, end, tuple((i, w * value) for i, w in amounts))
-        )
-        self._next_end_s = min(self._next_end_s, end)
-        self._dirty = True
+        self.batch.trigger(0, emotion, intensity, t_s, envelope)
 
     def set_pad(self, pleasure: float, arousal: float, dominance: float, t_s: float) -> None:
         """Move the PAD factor state (each in [-1, 1]) to a new value, reached linearly over ``envelope.onset_s``.
@@ -187,34 +424,22 @@ class EmotionEngine:
         """
         if self.mode != "pad":
             raise InvalidValueError("mode", self.mode, "'pad' to use set_pad (EmotionEngine(mode='pad'))")
-        target = check_pad(pleasure, arousal, dominance)
-        start = _finite("t_s", t_s)
-        self._pad_from = self._pad_at(start)
-        self._pad_to = target
-        self._pad_t0_s = start
-        self._pad_ramp_s = self.envelope.onset_s
-        self._pad_settled = pad_intensities(*target, radius=self.pad_radius)
-        self._dirty = True
+        self.batch.set_pad(0, pleasure, arousal, dominance, t_s)
 
     def set_mood(self, mood: object) -> None:
         """Set the mood (6,) intensities, each finite in [0, 5] (e.g. a character's resting disposition)."""
-        try:
-            values = np.asarray(mood, dtype=np.float64).reshape(-1)
-        except (TypeError, ValueError):
-            raise InvalidValueError("mood", mood, f"{_N} intensities in [0, 5]") from None
-        if values.shape != (_N,):
-            raise InvalidValueError("mood", mood, f"{_N} intensities in [0, 5] ({', '.join(EMOTIONS)})")
-        self._mood = [check_intensity(v, f"mood[{name}]") for v, name in zip(values.tolist(), EMOTIONS, strict=True)]
+        self.batch.set_mood(0, mood)
 
     def reset(self) -> None:
         """Forget every event, the PAD state, the mood and the time."""
-        self.__init__(  # type: ignore[misc]
-            self.mode,
-            self.envelope,
-            self.mood_time_constant_s,
-            self.mood_gain,
-            pad_radius=self.pad_radius,
-            mood_max_step_s=self.mood_max_step_s,
+        b = self.batch
+        self.batch = EmotionBatch(
+            1,
+            b.envelope,
+            b.mood_time_constant_s,
+            b.mood_gain,
+            pad_radius=b.pad_radius,
+            mood_max_step_s=b.mood_max_step_s,
         )
 
     # ---------------------------------------------------------------- output
@@ -222,25 +447,25 @@ class EmotionEngine:
     @property
     def n_events(self) -> int:
         """Number of events not yet pruned (pruning happens when time advances past their end)."""
-        return len(self._events)
+        return self.batch.n_events()
 
     def pad(self, t_s: float) -> np.ndarray:
         """(3,) PAD factor state at ``t_s`` (zeros in categorical mode)."""
-        return np.array(self._pad_at(_finite("t_s", t_s)))
+        return self.batch.pad_at(t_s)[0]
 
     def intensities(self, t_s: float, out: np.ndarray | None = None) -> np.ndarray:
         """(6,) emotion intensities at ``t_s`` (EMOTIONS order; 0..5), written to ``out`` if given."""
-        return _write(self._advance(t_s), out)
+        return _write(self.batch.advance(t_s)[0], out)
 
     def mood(self, t_s: float, out: np.ndarray | None = None) -> np.ndarray:
         """(6,) mood at ``t_s``: the moving average of the emotion, advanced incrementally to ``t_s``."""
-        self._advance(t_s)
-        return _write(self._mood, out)
+        self.batch.advance(t_s)
+        return _write(self.batch.mood[0], out)
 
     def state(self, t_s: float) -> tuple[np.ndarray, np.ndarray]:
         """``(emotion (6,), mood (6,))`` at ``t_s``."""
-        emotion = self._advance(t_s)
-        return np.array(emotion), np.array(self._mood)
+        emotion = self.batch.advance(t_s)
+        return emotion[0].copy(), self.batch.mood[0].copy()
 
     def expressed(
         self, t_s: float, emotion_out: np.ndarray | None = None, mood_out: np.ndarray | None = None
@@ -250,85 +475,8 @@ class EmotionEngine:
         ``shown_mood = (1 - min(1, sum(emotion))) * mood``: express ``emotion`` with the full basis and
         ``shown_mood`` with the closed-mouth basis, and add the two.
         """
-        emotion = self._advance(t_s)
-        occlusion = 1.0 - min(1.0, sum(emotion))
-        shown = [occlusion * m for m in self._mood]
-        return _write(emotion, emotion_out), _write(shown, mood_out)
-
-    # ---------------------------------------------------------------- internals
-
-    def _pad_at(self, t_s: float) -> tuple[float, float, float]:
-        elapsed = t_s - self._pad_t0_s
-        if elapsed >= self._pad_ramp_s:
-            return self._pad_to
-        if elapsed <= 0.0:
-            return self._pad_from
-        f = elapsed / self._pad_ramp_s
-        a, b = self._pad_from, self._pad_to
-        return (a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1]), a[2] + f * (b[2] - a[2]))
-
-    def _emotion_at(self, t_s: float) -> list[float]:
-        """Emotion at ``t_s`` as a list (may be the shared ``_ZERO``: never mutate the result)."""
-        if self.mode == "pad":
-            if t_s - self._pad_t0_s >= self._pad_ramp_s:
-                e = self._pad_settled.copy()
-            else:
-                e = pad_intensities(*self._pad_at(t_s), radius=self.pad_radius)
-        elif not self._events:
-            return _ZERO
-        else:
-            e = [0.0] * _N
-        for ev in self._events:
-            if ev.start_s <= t_s < ev.end_s:
-                v = envelope_value(t_s - ev.start_s, ev.onset_s, ev.hold_s, ev.decay_s)
-                for index, amount in ev.amounts:
-                    e[index] += v * amount
-        if max(e) > MAX_INTENSITY:
-            e = [min(x, MAX_INTENSITY) for x in e]
-        return e
-
-    def _advance(self, t_s: float) -> list[float]:
-        t = float(t_s)
-        if not math.isfinite(t):
-            raise InvalidValueError("t_s", t_s, "a finite number of seconds")
-        last = self._t_s
-        if last is None:
-            self._t_s = t
-            self._emotion = self._emotion_at(t)
-            self._dirty = False
-            return self._emotion
-        if t < last:  # no rewinding: the emotion at t, mood untouched
-            return self._emotion_at(t)
-        if self._dirty:
-            self._emotion = self._emotion_at(last)
-            self._dirty = False
-        if t == last:
-            return self._emotion
-        dt = t - last
-        n_steps = math.ceil(dt / self.mood_max_step_s) if dt > self.mood_max_step_s else 1
-        step = dt / n_steps
-        if step != self._last_dt_s:  # fixed frame rates reuse the factor
-            self._last_dt_s = step
-            self._last_k = -math.expm1(-step / self.mood_time_constant_s)
-        k = self._last_k
-        half_gain = 0.5 * self.mood_gain
-        mood = self._mood
-        previous = self._emotion
-        for s in range(1, n_steps + 1):
-            current = self._emotion_at(t if s == n_steps else last + s * step)
-            if previous is _ZERO and current is _ZERO:
-                keep = 1.0 - k
-                mood = [keep * m for m in mood]
-            else:
-                mood = [m + k * (half_gain * (a + b) - m) for m, a, b in zip(mood, previous, current, strict=True)]
-            previous = current
-        self._mood = mood
-        self._t_s = t
-        self._emotion = previous
-        if t >= self._next_end_s:
-            self._events = [ev for ev in self._events if ev.end_s > t]
-            self._next_end_s = min((ev.end_s for ev in self._events), default=math.inf)
-        return previous
+        emotion, shown = self.batch.expressed(t_s)
+        return _write(emotion[0], emotion_out), _write(shown[0], mood_out)
 
 
 def mood_step(

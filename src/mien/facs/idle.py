@@ -1,8 +1,8 @@
 """Idle behaviour: blinks, micro random walks (OpenFACS), gaze shifts and head wobble (Broekens).
 
 Everything is a pure function of the seed and the time, drawn from :mod:`mien.facs.counter_random`, so a
-face at time t is reproducible and a batch of characters (:class:`IdleBatch`) matches single characters
-(:class:`Idle`) exactly.
+face at time t is reproducible. :class:`IdleBatch` runs n characters; one character's :class:`Idle` is a
+batch of one, so both are the same code.
 
 - Blinks (OpenFACS): the time from one blink's start to the next ~ Normal(6 s, 2 s) (redrawn values below the
   blink duration are clamped to it), each 360 ms: 180 ms closing, 180 ms opening, AU45 peaking at E.
@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from mien.errors import InvalidValueError
 from mien.facs.catalogue import channel_index
 from mien.facs.counter_random import normal, uniform
 
@@ -67,7 +68,6 @@ _WALK_B = np.array([w.b for w in _WALKS])
 _WALK_STEP = np.array([w.step for w in _WALKS])
 _WALK_MOVE = np.array([w.move_probability for w in _WALKS])
 _BLINK_STREAM, _GAZE_STREAM, _GAZE_TIME_STREAM, _WOBBLE_STREAM = 100, 200, 201, 300
-_BLOCK_TICKS = 512
 
 _AU12 = (channel_index("AU12L"), channel_index("AU12R"))
 _AU15 = (channel_index("AU15L"), channel_index("AU15R"))
@@ -137,218 +137,261 @@ def blink_level(elapsed_s: float, duration_s: float) -> float:
     return 1.0 - abs(elapsed_s - half) / half
 
 
-def _blink_interval(settings: IdleSettings, seed: np.ndarray | int, k: np.ndarray | int) -> np.ndarray:
-    return np.maximum(
-        settings.blink_duration_s, settings.blink_mean_s + settings.blink_sd_s * normal(seed, _BLINK_STREAM, k)
-    )
-
-
-def _fixation(settings: IdleSettings, seed: np.ndarray | int, k: np.ndarray | int) -> tuple[np.ndarray, np.ndarray]:
-    """(hold duration s, gaze yaw deg) of fixation k."""
-    low, high = settings.gaze_hold_s
-    hold = low + (high - low) * uniform(seed, _GAZE_TIME_STREAM, k)
-    side = np.floor(uniform(seed, _GAZE_STREAM, k) * 3.0) - 1.0  # -1, 0, +1
-    return hold, side * settings.gaze_yaw_deg
-
-
 def _wobble_phase(seed: np.ndarray | int) -> np.ndarray:
     return 2.0 * np.pi * uniform(seed, _WOBBLE_STREAM, np.arange(2))
 
 
-def _walk_ticks(seed: int, first_tick: int, n_ticks: int, start: list[float]) -> np.ndarray:
-    """(n_ticks, 5) walk positions after each tick, starting from positions ``start``."""
-    ticks = np.arange(first_tick, first_tick + n_ticks)[:, None]
-    streams = np.arange(len(_WALKS))[None, :] * 2
-    moves = (uniform(seed, streams, ticks) < _WALK_MOVE).tolist()
-    dirs = uniform(seed, streams + 1, ticks).tolist()
-    a, b, step = _WALK_A.tolist(), _WALK_B.tolist(), _WALK_STEP.tolist()
-    out = np.empty((n_ticks, len(_WALKS)))
-    m = list(start)
-    for i in range(n_ticks):
-        move_row, dir_row = moves[i], dirs[i]
-        for w in range(len(_WALKS)):
-            if move_row[w]:
-                x = m[w]
-                x = x + step[w] if dir_row[w] < 1.0 - (a[w] + b[w] * x) else x - step[w]
-                m[w] = min(1.0, max(-1.0, x))
-        out[i] = m
-    return out
+_OFF = IdleSettings(blink=False, mouth=False, eyelids=False, neck=False, gaze=False, wobble=False)
+"""Settings of a row without idle behaviour."""
+
+_PARTS = ("blink", "mouth", "eyelids", "neck", "gaze", "wobble")
+_NUMBERS = (
+    "tick_hz",
+    "blink_mean_s",
+    "blink_sd_s",
+    "blink_duration_s",
+    "mouth_au_at_1",
+    "eyelid_au_at_1",
+    "neck_yaw_deg_at_1",
+    "neck_roll_deg_at_1",
+    "gaze_yaw_deg",
+    "saccade_s",
+    "wobble_yaw_deg",
+    "wobble_roll_deg",
+    "wobble_period_s",
+)
+_WALK_STREAMS = np.arange(2 * len(_WALKS), dtype=np.uint64)  # walk i: stream 2i (move?), 2i + 1 (direction)
 
 
-class Idle:
-    """Idle behaviour of one character; :meth:`apply` adds it into a face frame at time t."""
+def _blink_interval(
+    mean_s: np.ndarray | float,
+    sd_s: np.ndarray | float,
+    duration_s: np.ndarray | float,
+    seed: np.ndarray,
+    k: np.ndarray,
+) -> np.ndarray:
+    return np.maximum(duration_s, mean_s + sd_s * normal(seed, _BLINK_STREAM, k))
 
-    def __init__(self, seed: int = 0, settings: IdleSettings | None = None) -> None:
-        self.seed = int(seed)
-        self.settings = settings or IdleSettings()
-        self._block_index = -1
-        self._block: list[list[float]] = []
-        self._block_ends: list[list[float]] = [[0.0] * len(_WALKS)]  # positions at the start of each block
-        self._blink_k = 0
-        self._blink_start = float(_blink_interval(self.settings, self.seed, 0))
-        self._fix_k = 0
-        self._fix_start = 0.0
-        hold, yaw = _fixation(self.settings, self.seed, 0)
-        self._fix_end = float(hold)
-        self._gaze_from = 0.0
-        self._gaze_to = float(yaw)
-        self._phase = _wobble_phase(self.seed).tolist()
-        self._t_s = 0.0
 
-    def walk_positions(self, t_s: float) -> list[float]:
-        """Positions of the five walks (mouth L, mouth R, eyelids, neck twist, neck side) at ``t_s``."""
-        tick = int(t_s * self.settings.tick_hz)
-        if tick == 0:
-            return self._block_ends[0]
-        block, row = divmod(tick - 1, _BLOCK_TICKS)
-        if block != self._block_index:
-            while len(self._block_ends) <= block:  # walks are sequential: fill earlier blocks first
-                k = len(self._block_ends) - 1
-                data = _walk_ticks(self.seed, k * _BLOCK_TICKS, _BLOCK_TICKS, self._block_ends[k])
-                self._block_ends.append(data[-1].tolist())
-            self._block = _walk_ticks(self.seed, block * _BLOCK_TICKS, _BLOCK_TICKS, self._block_ends[block]).tolist()
-            self._block_index = block
-        return self._block[row]
-
-    def blink(self, t_s: float) -> float:
-        """Lid closure 0..1 from spontaneous blinks at ``t_s`` (times must not decrease)."""
-        settings = self.settings
-        while t_s >= self._blink_start + settings.blink_duration_s:
-            self._blink_k += 1
-            self._blink_start += float(_blink_interval(settings, self.seed, self._blink_k))
-        return blink_level(t_s - self._blink_start, settings.blink_duration_s)
-
-    def gaze_yaw(self, t_s: float) -> float:
-        """Gaze yaw (degrees) from fixation shifts at ``t_s`` (times must not decrease)."""
-        while t_s >= self._fix_end:
-            self._fix_k += 1
-            self._gaze_from = self._gaze_to
-            hold, yaw = _fixation(self.settings, self.seed, self._fix_k)
-            self._fix_start = self._fix_end
-            self._fix_end += float(hold)
-            self._gaze_to = float(yaw)
-        progress = (t_s - self._fix_start) / self.settings.saccade_s
-        if progress >= 1.0:
-            return self._gaze_to
-        return self._gaze_from + (self._gaze_to - self._gaze_from) * progress
-
-    def apply(self, t_s: float, frame: np.ndarray, mouth_scale: float = 1.0) -> None:
-        """Add idle motion at ``t_s`` into the (62,) ``frame`` in place.
-
-        ``mouth_scale`` (0..1) lets idle mouth motion yield to a laughing or speaking mouth; blinks combine
-        by max with the expression's AU45, so a blink during a smile still closes the eyes.
-        """
-        s = self.settings
-        if s.mouth or s.eyelids or s.neck:
-            m = self.walk_positions(t_s)
-            if s.mouth and mouth_scale > 0.0:
-                for side in (0, 1):
-                    value = m[side] * s.mouth_au_at_1 * mouth_scale
-                    if value > 0.0:
-                        frame[_AU12[side]] += value
-                    else:
-                        frame[_AU15[side]] -= value
-            if s.eyelids:
-                value = m[2] * s.eyelid_au_at_1
-                channels = _AU5 if value > 0.0 else _AU43
-                frame[channels[0]] += abs(value)
-                frame[channels[1]] += abs(value)
-            if s.neck:
-                frame[_YAW] += m[3] * s.neck_yaw_deg_at_1
-                frame[_ROLL] += m[4] * s.neck_roll_deg_at_1
-        if s.blink:
-            level = 5.0 * self.blink(t_s)
-            if level > 0.0:
-                for channel in _AU45:
-                    if frame[channel] < level:
-                        frame[channel] = level
-        if s.gaze:
-            frame[_GAZE_YAW] += self.gaze_yaw(t_s)
-        if s.wobble:
-            angle = 2.0 * math.pi * t_s / s.wobble_period_s
-            frame[_YAW] += s.wobble_yaw_deg * math.sin(angle + self._phase[0])
-            frame[_ROLL] += s.wobble_roll_deg * math.sin(angle / 1.37 + self._phase[1])
+def _fixation(
+    low_s: np.ndarray, high_s: np.ndarray, yaw_deg: np.ndarray, seed: np.ndarray, k: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """(hold duration s, gaze yaw deg) of fixation k."""
+    hold = low_s + (high_s - low_s) * uniform(seed, _GAZE_TIME_STREAM, k)
+    side = np.floor(uniform(seed, _GAZE_STREAM, k) * 3.0) - 1.0  # -1, 0, +1
+    return hold, side * yaw_deg
 
 
 class IdleBatch:
-    """Idle behaviour of many characters at once (one seed each), equal to :class:`Idle` per character."""
+    """Idle behaviour of n characters (rows, one seed and one :class:`IdleSettings` each), vectorised.
+
+    Every step costs about the same: the random walks advance tick by tick (no block is precomputed), and
+    blinks and fixations are drawn one at a time when due. A row's idle starts when the row is added (at
+    ``t_s``; walks at 0, the first blink and fixation drawn from there); times must not decrease.
+
+    >>> batch = IdleBatch(np.array([1, 2]))
+    >>> frames = np.zeros((2, 62))
+    >>> batch.apply(1.0, frames)
+    >>> bool(np.any(frames[0] != frames[1]))
+    True
+    """
 
     def __init__(self, seeds: np.ndarray, settings: IdleSettings | None = None) -> None:
-        self.seeds = np.asarray(seeds, dtype=np.uint64)
-        self.settings = settings or IdleSettings()
-        n = self.seeds.shape[0]
-        self._tick = 0
-        self._m = np.zeros((n, len(_WALKS)))
-        self._streams = np.arange(len(_WALKS))[None, :] * 2
-        self._blink_k = np.zeros(n, dtype=np.uint64)
-        self._blink_start = _blink_interval(self.settings, self.seeds, self._blink_k)
-        self._fix_k = np.zeros(n, dtype=np.uint64)
-        self._fix_start = np.zeros(n)
-        hold, yaw = _fixation(self.settings, self.seeds, self._fix_k)
-        self._fix_end = hold
-        self._gaze_from = np.zeros(n)
-        self._gaze_to = yaw
-        phases = _wobble_phase(self.seeds[:, None])
-        self._phase0, self._phase1 = phases[:, 0], phases[:, 1]
+        """Rows for ``seeds`` ((n,) non-negative ints), all with ``settings`` (default :class:`IdleSettings`)."""
+        seeds = np.atleast_1d(np.asarray(seeds))
+        self.seeds = np.zeros(0, np.uint64)
+        """(n,) seeds."""
+        self.settings: list[IdleSettings] = []
+        """Settings of each row."""
+        self._on = {part: np.zeros(0) for part in _PARTS}  # 1.0 where the part runs
+        self._num = {name: np.zeros(0) for name in _NUMBERS}
+        self._hold_low = np.zeros(0)
+        self._hold_high = np.zeros(0)
+        self._tick = np.zeros(0, np.int64)
+        self._m = np.zeros((0, len(_WALKS)))
+        self._blink_k = np.zeros(0, np.uint64)
+        self._blink_start = np.zeros(0)
+        self._fix_k = np.zeros(0, np.uint64)
+        self._fix_start = np.zeros(0)
+        self._fix_end = np.zeros(0)
+        self._gaze_from = np.zeros(0)
+        self._gaze_to = np.zeros(0)
+        self._phase = np.zeros((0, 2))
+        self._walking = False
+        self.add_rows(seeds, settings if settings is not None else IdleSettings())
 
-    def _advance_walks(self, t_s: float) -> np.ndarray:
-        target_tick = int(t_s * self.settings.tick_hz)
-        seeds = self.seeds[:, None]
-        while self._tick < target_tick:
-            move = uniform(seeds, self._streams, self._tick) < _WALK_MOVE
-            up = uniform(seeds, self._streams + 1, self._tick) < 1.0 - (_WALK_A + _WALK_B * self._m)
-            stepped = np.where(up, self._m + _WALK_STEP, self._m - _WALK_STEP)
+    @property
+    def n_rows(self) -> int:
+        """Number of rows."""
+        return int(self.seeds.shape[0])
+
+    def add_rows(self, seeds: np.ndarray, settings: IdleSettings | None = None, t_s: float = 0.0) -> None:
+        """Append rows for ``seeds`` ((k,) non-negative ints) with ``settings``, starting at ``t_s``."""
+        count = len(seeds)
+        first = self.n_rows
+        self.seeds = np.concatenate([self.seeds, np.zeros(count, np.uint64)])
+        self.settings.extend([_OFF] * count)
+        for table in (self._on, self._num):
+            for key in table:
+                table[key] = np.concatenate([table[key], np.zeros(count)])
+        names = (
+            "_hold_low _hold_high _tick _blink_k _blink_start _fix_k _fix_start _fix_end _gaze_from _gaze_to"
+        ).split()
+        for name in names:
+            array = getattr(self, name)
+            setattr(self, name, np.concatenate([array, np.zeros(count, array.dtype)]))
+        self._m = np.concatenate([self._m, np.zeros((count, len(_WALKS)))])
+        self._phase = np.concatenate([self._phase, np.zeros((count, 2))])
+        self.reset_rows(np.arange(first, first + count), np.asarray(seeds), settings, t_s)
+
+    def reset_rows(
+        self, rows: np.ndarray, seeds: np.ndarray, settings: IdleSettings | None = None, t_s: float = 0.0
+    ) -> None:
+        """Restart ``rows`` with new ``seeds`` and ``settings`` (None: no idle) from time ``t_s``."""
+        rows = np.atleast_1d(rows)
+        if rows.size == 0:
+            return
+        values = np.atleast_1d(np.asarray(seeds))
+        if values.dtype.kind not in "iu" or np.any(values < 0):
+            raise InvalidValueError("seed", seeds, "non-negative integers")
+        s = settings if settings is not None else _OFF
+        self.seeds[rows] = values.astype(np.uint64)
+        for row in rows.tolist():
+            self.settings[row] = s
+        for part in _PARTS:
+            self._on[part][rows] = float(getattr(s, part))
+        for name in _NUMBERS:
+            self._num[name][rows] = float(getattr(s, name))
+        self._hold_low[rows], self._hold_high[rows] = s.gaze_hold_s
+        seed = self.seeds[rows]
+        zero = np.zeros(rows.size, np.uint64)
+        self._tick[rows] = int(t_s * s.tick_hz)
+        self._m[rows] = 0.0
+        self._blink_k[rows] = 0
+        self._blink_start[rows] = t_s + _blink_interval(s.blink_mean_s, s.blink_sd_s, s.blink_duration_s, seed, zero)
+        hold, yaw = _fixation(self._hold_low[rows], self._hold_high[rows], self._num["gaze_yaw_deg"][rows], seed, zero)
+        self._fix_k[rows] = 0
+        self._fix_start[rows] = t_s
+        self._fix_end[rows] = t_s + hold
+        self._gaze_from[rows] = 0.0
+        self._gaze_to[rows] = yaw
+        self._phase[rows] = _wobble_phase(seed[:, None])
+        self._walking = bool(np.any(self._on["mouth"] + self._on["eyelids"] + self._on["neck"]))
+
+    def walk_positions(self, t_s: float) -> np.ndarray:
+        """(n, 5) positions of the walks (mouth L, mouth R, eyelids, neck twist, neck side) at ``t_s``.
+
+        Advances each row's walks tick by tick (``tick_hz``) up to ``t_s``; returns the batch's own array.
+        """
+        target = (t_s * self._num["tick_hz"]).astype(np.int64)
+        behind = self._tick < target
+        while behind.any():
+            u = uniform(self.seeds[:, None], _WALK_STREAMS[None, :], self._tick.astype(np.uint64)[:, None])
+            move = (u[:, 0::2] < _WALK_MOVE) & behind[:, None]
+            m = self._m
+            up = u[:, 1::2] < 1.0 - (_WALK_A + _WALK_B * m)
+            stepped = np.where(up, m + _WALK_STEP, m - _WALK_STEP)
             np.clip(stepped, -1.0, 1.0, out=stepped)
-            self._m = np.where(move, stepped, self._m)
-            self._tick += 1
+            np.copyto(m, stepped, where=move)
+            self._tick += behind
+            behind = self._tick < target
         return self._m
 
-    def _blink(self, t_s: float) -> np.ndarray:
-        duration = self.settings.blink_duration_s
+    def blink(self, t_s: float) -> np.ndarray:
+        """(n,) lid closure 0..1 from spontaneous blinks at ``t_s`` (times must not decrease)."""
+        duration = self._num["blink_duration_s"]
         due = t_s >= self._blink_start + duration
         while due.any():
-            self._blink_k[due] += np.uint64(1)
-            self._blink_start[due] += _blink_interval(self.settings, self.seeds[due], self._blink_k[due])
+            rows = np.flatnonzero(due)
+            self._blink_k[rows] += np.uint64(1)
+            self._blink_start[rows] += _blink_interval(
+                self._num["blink_mean_s"][rows], self._num["blink_sd_s"][rows], duration[rows],
+                self.seeds[rows], self._blink_k[rows],
+            )  # fmt: skip
             due = t_s >= self._blink_start + duration
         elapsed = t_s - self._blink_start
         half = 0.5 * duration
-        level = 1.0 - np.abs(elapsed - half) / half
+        with np.errstate(divide="ignore", invalid="ignore"):
+            level = 1.0 - np.abs(elapsed - half) / half
         return np.where((elapsed > 0.0) & (elapsed < duration), level, 0.0)
 
-    def _gaze(self, t_s: float) -> np.ndarray:
+    def gaze_yaw(self, t_s: float) -> np.ndarray:
+        """(n,) gaze yaw (degrees) from fixation shifts at ``t_s`` (times must not decrease)."""
         due = t_s >= self._fix_end
         while due.any():
-            self._fix_k[due] += np.uint64(1)
-            self._gaze_from[due] = self._gaze_to[due]
-            hold, yaw = _fixation(self.settings, self.seeds[due], self._fix_k[due])
-            self._fix_start[due] = self._fix_end[due]
-            self._fix_end[due] += hold
-            self._gaze_to[due] = yaw
+            rows = np.flatnonzero(due)
+            self._fix_k[rows] += np.uint64(1)
+            self._gaze_from[rows] = self._gaze_to[rows]
+            hold, yaw = _fixation(
+                self._hold_low[rows], self._hold_high[rows], self._num["gaze_yaw_deg"][rows],
+                self.seeds[rows], self._fix_k[rows],
+            )  # fmt: skip
+            self._fix_start[rows] = self._fix_end[rows]
+            self._fix_end[rows] += hold
+            self._gaze_to[rows] = yaw
             due = t_s >= self._fix_end
-        progress = np.minimum((t_s - self._fix_start) / self.settings.saccade_s, 1.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            progress = np.minimum((t_s - self._fix_start) / self._num["saccade_s"], 1.0)
         return self._gaze_from + (self._gaze_to - self._gaze_from) * progress
 
     def apply(self, t_s: float, frames: np.ndarray, mouth_scale: np.ndarray | float = 1.0) -> None:
-        """Add idle motion at ``t_s`` into (n_characters, 62) ``frames`` in place (see :meth:`Idle.apply`)."""
-        s = self.settings
-        if s.mouth or s.eyelids or s.neck:
-            m = self._advance_walks(t_s)
-            if s.mouth:
-                value = m[:, 0:2] * s.mouth_au_at_1 * np.asarray(mouth_scale, dtype=float).reshape(-1, 1)
-                frames[:, _AU12] += np.maximum(value, 0.0)
-                frames[:, _AU15] += np.maximum(-value, 0.0)
-            if s.eyelids:
-                value = (m[:, 2] * s.eyelid_au_at_1)[:, None]
-                frames[:, _AU5] += np.maximum(value, 0.0)
-                frames[:, _AU43] += np.maximum(-value, 0.0)
-            if s.neck:
-                frames[:, _YAW] += m[:, 3] * s.neck_yaw_deg_at_1
-                frames[:, _ROLL] += m[:, 4] * s.neck_roll_deg_at_1
-        if s.blink:
-            frames[:, _AU45] = np.maximum(frames[:, _AU45], (5.0 * self._blink(t_s))[:, None])
-        if s.gaze:
-            frames[:, _GAZE_YAW] += self._gaze(t_s)
-        if s.wobble:
-            angle = 2.0 * math.pi * t_s / s.wobble_period_s
-            frames[:, _YAW] += s.wobble_yaw_deg * np.sin(angle + self._phase0)
-            frames[:, _ROLL] += s.wobble_roll_deg * np.sin(angle / 1.37 + self._phase1)
+        """Add idle motion at ``t_s`` into (n, 62) ``frames`` in place.
+
+        ``mouth_scale`` ((n,) or scalar, 0..1) lets idle mouth motion yield to a laughing or speaking mouth;
+        blinks combine by max with the expression's AU45, so a blink during a smile still closes the eyes.
+        """
+        on, num = self._on, self._num
+        if self._walking:
+            m = self.walk_positions(t_s)
+            mouth = m[:, 0:2] * (on["mouth"] * num["mouth_au_at_1"] * mouth_scale)[:, None]
+            frames[:, _AU12] += np.maximum(mouth, 0.0)
+            frames[:, _AU15] += np.maximum(-mouth, 0.0)
+            lids = (m[:, 2] * (on["eyelids"] * num["eyelid_au_at_1"]))[:, None]
+            frames[:, _AU5] += np.maximum(lids, 0.0)
+            frames[:, _AU43] += np.maximum(-lids, 0.0)
+            frames[:, _YAW] += m[:, 3] * (on["neck"] * num["neck_yaw_deg_at_1"])
+            frames[:, _ROLL] += m[:, 4] * (on["neck"] * num["neck_roll_deg_at_1"])
+        if on["blink"].any():
+            level = (5.0 * on["blink"]) * self.blink(t_s)
+            frames[:, _AU45] = np.maximum(frames[:, _AU45], level[:, None])
+        if on["gaze"].any():
+            frames[:, _GAZE_YAW] += on["gaze"] * self.gaze_yaw(t_s)
+        if on["wobble"].any():
+            with np.errstate(divide="ignore", invalid="ignore"):
+                angle = (2.0 * math.pi * t_s) / num["wobble_period_s"]
+            wobble = on["wobble"]
+            frames[:, _YAW] += np.where(wobble > 0, num["wobble_yaw_deg"] * np.sin(angle + self._phase[:, 0]), 0.0)
+            frames[:, _ROLL] += np.where(
+                wobble > 0, num["wobble_roll_deg"] * np.sin(angle / 1.37 + self._phase[:, 1]), 0.0
+            )
+
+
+class Idle:
+    """Idle behaviour of one character: an :class:`IdleBatch` of one row (one implementation of both)."""
+
+    def __init__(self, seed: int = 0, settings: IdleSettings | None = None) -> None:
+        self.seed = int(seed)
+        """Seed of every random draw."""
+        self.settings = settings or IdleSettings()
+        """Which motions run and how large."""
+        self.batch = IdleBatch(np.array([self.seed]), self.settings)
+        """The one-row batch doing the work."""
+
+    def walk_positions(self, t_s: float) -> list[float]:
+        """Positions of the five walks (mouth L, mouth R, eyelids, neck twist, neck side) at ``t_s``.
+
+        Times must not decrease.
+        """
+        return [float(x) for x in self.batch.walk_positions(t_s)[0]]
+
+    def blink(self, t_s: float) -> float:
+        """Lid closure 0..1 from spontaneous blinks at ``t_s`` (times must not decrease)."""
+        return float(self.batch.blink(t_s)[0])
+
+    def gaze_yaw(self, t_s: float) -> float:
+        """Gaze yaw (degrees) from fixation shifts at ``t_s`` (times must not decrease)."""
+        return float(self.batch.gaze_yaw(t_s)[0])
+
+    def apply(self, t_s: float, frame: np.ndarray, mouth_scale: float = 1.0) -> None:
+        """Add idle motion at ``t_s`` into the (62,) ``frame`` in place (see :meth:`IdleBatch.apply`)."""
+        self.batch.apply(t_s, frame[None], mouth_scale)
