@@ -162,10 +162,11 @@ class Store:
     """The study database at ``url`` (a SQLAlchemy URL; see :func:`database_url`). Creates its tables.
 
     Thread-safe (a connection pool); every method is one transaction, retried on a locked or lost
-    database. ``retry_s`` is the first back-off, doubled per attempt.
+    database. ``retry_s`` is the first back-off, doubled per attempt; ``busy_timeout_s`` how long SQLite waits
+    for a lock inside one attempt (PostgreSQL: the connect timeout).
     """
 
-    def __init__(self, url: str, retry_s: float = 0.05) -> None:
+    def __init__(self, url: str, retry_s: float = 0.05, busy_timeout_s: float = 5.0) -> None:
         try:
             import sqlalchemy as sa
         except ImportError:
@@ -177,14 +178,14 @@ class Store:
         if self.is_sqlite:
             from sqlalchemy.dialects.sqlite import insert
 
-            engine = sa.create_engine(url, connect_args={"timeout": 5.0, "check_same_thread": False}, pool_size=20)
+            engine = sa.create_engine(url, connect_args={"timeout": busy_timeout_s, "check_same_thread": False}, pool_size=20)
 
             @sa.event.listens_for(engine, "connect")
             def _pragmas(connection: Any, _record: Any) -> None:
                 cursor = connection.cursor()
                 cursor.execute("PRAGMA journal_mode=WAL")
                 cursor.execute("PRAGMA synchronous=NORMAL")  # WAL + NORMAL: a commit survives a killed process
-                cursor.execute("PRAGMA busy_timeout=5000")
+                cursor.execute(f"PRAGMA busy_timeout={int(busy_timeout_s * 1000)}")
                 cursor.close()
 
         else:
@@ -192,7 +193,13 @@ class Store:
                 from sqlalchemy.dialects.postgresql import insert
             except ImportError:
                 raise MissingExtraError("psycopg", "study") from None
-            engine = sa.create_engine(url, pool_size=20, max_overflow=20, pool_pre_ping=True)
+            engine = sa.create_engine(
+                url,
+                pool_size=20,
+                max_overflow=20,
+                pool_pre_ping=True,
+                connect_args={"connect_timeout": max(1, round(busy_timeout_s))},
+            )
         self._insert = insert
         self.engine = engine
         self._meta, self.tables = _schema()
