@@ -381,10 +381,14 @@ class Store:
             for question, rating in ratings.items()
         ]
 
+        if not rows:
+            return 0
+
         def write() -> int:
             with self.engine.begin() as connection:
-                result = connection.execute(self._insert(table).on_conflict_do_nothing(), rows)
-                return max(0, int(result.rowcount or 0))
+                # one multi-row INSERT; RETURNING counts the rows that were new on both dialects
+                statement = self._insert(table).values(rows).on_conflict_do_nothing().returning(table.c.question)
+                return len(connection.execute(statement).fetchall())
 
         return self._retry(write)
 
