@@ -116,11 +116,13 @@ def controllers_from_track(track: Any, eps: float = DEFAULT_EPS, neutral: Neutra
     counts from the take's start). An empty list when the track has no take.
     """
     from mien.tracking.ibug68 import ibug68
+    from mien.tracking.track import resample_on_times
 
     points = ibug68(track.landmarks_px[..., :2])
     clips = []
-    for start, stop in track.takes:
-        clips.append(controllers_from_points(points[start:stop], track.fps, eps, neutral))
+    for start, stop in track.takes:  # on a regular grid at track.fps, interpolated on the frames' real times
+        regular = resample_on_times(track.timestamps_s[start:stop], points[start:stop], track.fps)
+        clips.append(controllers_from_points(regular, track.fps, eps, neutral))
     return clips
 
 

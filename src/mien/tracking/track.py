@@ -2,9 +2,13 @@
 
 A frame without a face is marked (``face_found`` False). A gap of missing frames between two tracked frames
 lasting at most ``max_gap_s`` (default :data:`MAX_GAP_S` = 0.2 s: a blink-length dropout, 6 frames at 30 fps)
-is filled by linear interpolation and flagged in ``interpolated``; a longer gap ends the current take. A gap
-of ``k`` missing frames lasts ``k / fps`` seconds. Frames before the first and after the last face are never
-filled. A take is a maximal run of tracked or filled frames, as a half-open ``(start, stop)`` frame range.
+is filled by linear interpolation and flagged in ``interpolated``; a longer gap ends the current take. Time
+comes from each frame's own time stamp, never from an average rate, so variable-frame-rate videos keep their
+timing: a gap lasts from its first missing frame to the next found frame (``k / fps`` seconds for ``k``
+missing frames of a constant-rate video), and filled values are interpolated on the frames' real times.
+Frames before the first and after the last face are never filled. A take is a maximal run of tracked or
+filled frames, as a half-open ``(start, stop)`` frame range; :func:`resample_on_times` puts a take on a
+regular grid where a fixed frame rate is needed.
 
 Tracking results are cached under ``mien.paths.cache_dir("tracks")``, keyed by the video's absolute path,
 size and modification time, the model file's SHA-256 and the tracker options, so a re-run is instant.
@@ -31,7 +35,16 @@ from mien.rig.arkit import ARKIT_NAMES
 from mien.tracking.landmarker import MIN_CONFIDENCE, N_LANDMARKS, head_pose_deg
 from mien.tracking.video import VideoInfo, probe
 
-__all__ = ["MAX_GAP_S", "TRACKER_VERSION", "Track", "apply_gaps", "fill_gaps", "load_track", "track_video"]
+__all__ = [
+    "MAX_GAP_S",
+    "TRACKER_VERSION",
+    "Track",
+    "apply_gaps",
+    "fill_gaps",
+    "load_track",
+    "resample_on_times",
+    "track_video",
+]
 
 MAX_GAP_S = 0.2
 """Default longest gap (seconds) filled by interpolation instead of splitting the take."""
@@ -50,13 +63,14 @@ class Track:
     source: str
     """Absolute path of the tracked video."""
     fps: float
-    """Average frame rate of the video, frames per second."""
+    """Average frame rate of the video, frames per second (a summary only: times come from ``timestamps_s``)."""
     width: int
     """Frame width, pixels."""
     height: int
     """Frame height, pixels."""
     timestamps_s: np.ndarray
-    """(n,) float64 presentation time of each frame, seconds from the first frame."""
+    """(n,) float64 presentation time of each frame (its pts x time_base), seconds from the first frame;
+    irregular for a variable-frame-rate video."""
     landmarks: np.ndarray
     """(n, 478, 3) float32 MediaPipe landmarks, normalised (x / width, y / height, z in x's scale)."""
     blendshapes: np.ndarray
@@ -79,6 +93,15 @@ class Track:
         return int(self.timestamps_s.shape[0])
 
     @property
+    def duration_s(self) -> float:
+        """Seconds covered: the last frame's time plus one median frame interval (``n / fps`` at a constant rate)."""
+        times = self.timestamps_s
+        if times.shape[0] == 0:
+            return 0.0
+        step = float(np.median(np.diff(times))) if times.shape[0] > 1 else 1.0 / self.fps
+        return float(times[-1] - times[0]) + step
+
+    @property
     def landmarks_px(self) -> np.ndarray:
         """(n, 478, 3) float32 landmarks in pixels: x * width, y * height, z * width (z in x's scale)."""
         return self.landmarks * np.array([self.width, self.height, self.width], dtype=np.float32)
@@ -92,7 +115,7 @@ class Track:
         """One human-readable paragraph: frames, faces found, gaps filled, takes."""
         name = Path(self.source).name
         n = self.n_frames
-        head = f"{name}: {n} frames at {self.fps:.2f} fps ({n / self.fps:.2f} s), {self.width}x{self.height}"
+        head = f"{name}: {n} frames at {self.fps:.2f} fps ({self.duration_s:.2f} s), {self.width}x{self.height}"
         found = int(self.face_found.sum())
         if not self.takes:
             return f"{head}; no face found on any frame: 0 takes."
@@ -194,12 +217,14 @@ def load_track(path: str | os.PathLike[str]) -> Track:
 
 
 def fill_gaps(
-    face_found: np.ndarray, fps: float, max_gap_s: float = MAX_GAP_S
+    face_found: np.ndarray, fps: float, max_gap_s: float = MAX_GAP_S, times_s: np.ndarray | None = None
 ) -> tuple[np.ndarray, list[tuple[int, int]]]:
     """Which missing frames to fill, and the takes.
 
-    face_found: (n,) bool. Returns ``(interpolated (n,) bool, takes)``: interior runs of missing frames of
-    at most ``max_gap_s`` seconds (``k / fps`` for ``k`` frames) are filled; longer runs split takes.
+    face_found: (n,) bool. times_s: (n,) frame times in seconds (default ``arange(n) / fps``: a constant
+    rate). Returns ``(interpolated (n,) bool, takes)``: interior runs of missing frames lasting at most
+    ``max_gap_s`` seconds (from the first missing frame to the next found one: ``k / fps`` for ``k`` frames
+    at a constant rate) are filled; longer runs split takes.
 
     >>> fill_gaps(np.array([1, 0, 1, 0, 0, 0, 1], bool), fps=10.0, max_gap_s=0.2)[1]
     [(0, 3), (6, 7)]
@@ -211,14 +236,14 @@ def fill_gaps(
     hits = np.flatnonzero(found)
     if hits.size == 0:
         return filled, []
-    max_frames = int(np.floor(max_gap_s * fps + 1e-9))
+    times = np.arange(found.shape[0]) / float(fps) if times_s is None else np.asarray(times_s, dtype=np.float64)
     takes: list[tuple[int, int]] = []
     start = int(hits[0])
     for previous, current in itertools.pairwise(hits):
         missing = int(current - previous - 1)
         if missing == 0:
             continue
-        if missing <= max_frames:
+        if times[current] - times[previous + 1] <= max_gap_s + 1e-9:
             filled[previous + 1 : current] = True
         else:
             takes.append((start, int(previous) + 1))
@@ -227,8 +252,9 @@ def fill_gaps(
     return filled, takes
 
 
-def _interpolate(values: np.ndarray, found: np.ndarray, fill: np.ndarray) -> np.ndarray:
-    """Linear interpolation over time of ``values`` (n, ...) on ``fill`` frames from ``found`` frames."""
+def _interpolate(values: np.ndarray, found: np.ndarray, fill: np.ndarray, times_s: np.ndarray) -> np.ndarray:
+    """Linear interpolation on the frames' real times ``times_s`` (n,) of ``values`` (n, ...) on ``fill``
+    frames from ``found`` frames."""
     out = values.copy()
     out[~found] = np.nan  # frames filled for an earlier max_gap_s start empty again
     if not fill.any():
@@ -236,23 +262,57 @@ def _interpolate(values: np.ndarray, found: np.ndarray, fill: np.ndarray) -> np.
     known, wanted = np.flatnonzero(found), np.flatnonzero(fill)
     after = np.searchsorted(known, wanted)  # filled frames always lie between two found ones
     before_frame, after_frame = known[after - 1], known[after]
-    weight = ((wanted - before_frame) / (after_frame - before_frame)).reshape((-1,) + (1,) * (values.ndim - 1))
+    times = np.asarray(times_s, dtype=np.float64)
+    span = np.maximum(times[after_frame] - times[before_frame], 1e-12)
+    weight = ((times[wanted] - times[before_frame]) / span).reshape((-1,) + (1,) * (values.ndim - 1))
     out[wanted] = (1.0 - weight) * out[before_frame] + weight * out[after_frame]
     return out
 
 
 def apply_gaps(raw: Track, max_gap_s: float = MAX_GAP_S) -> Track:
     """``raw`` with missing frames re-filled and takes re-split for ``max_gap_s`` (from ``face_found``)."""
-    filled, takes = fill_gaps(raw.face_found, raw.fps, max_gap_s)
+    times = raw.timestamps_s
+    filled, takes = fill_gaps(raw.face_found, raw.fps, max_gap_s, times)
     return replace(
         raw,
-        landmarks=_interpolate(raw.landmarks, raw.face_found, filled),
-        blendshapes=_interpolate(raw.blendshapes, raw.face_found, filled),
-        head_pose_deg=_interpolate(raw.head_pose_deg, raw.face_found, filled),
+        landmarks=_interpolate(raw.landmarks, raw.face_found, filled, times),
+        blendshapes=_interpolate(raw.blendshapes, raw.face_found, filled, times),
+        head_pose_deg=_interpolate(raw.head_pose_deg, raw.face_found, filled, times),
         interpolated=filled,
         takes=tuple(takes),
         max_gap_s=float(max_gap_s),
     )
+
+
+def resample_on_times(times_s: np.ndarray, values: np.ndarray, fps: float) -> np.ndarray:
+    """``values`` (n, ...) sampled at the real times ``times_s`` (n,) seconds -> a regular grid at ``fps``.
+
+    The grid starts at ``times_s[0]`` and steps ``1 / fps`` up to ``times_s[-1]``; each grid value is linearly
+    interpolated between the two frames around it, so a variable-frame-rate take keeps its timing. A
+    constant-rate take at ``fps`` comes back unchanged. Returns (m, ...) float64.
+
+    >>> resample_on_times(np.array([0.0, 0.1, 0.4]), np.array([0.0, 1.0, 4.0]), 10.0).round(6).tolist()
+    [0.0, 1.0, 2.0, 3.0, 4.0]
+    """
+    times = np.asarray(times_s, dtype=np.float64)
+    data = np.asarray(values, dtype=np.float64)
+    if not np.isfinite(fps) or fps <= 0:
+        raise InvalidValueError("fps", fps, "a positive finite frame rate")
+    if times.ndim != 1 or data.shape[:1] != times.shape:
+        raise InvalidValueError("times_s", f"shape {times.shape}", f"(n,) matching values of shape {data.shape}")
+    if times.shape[0] < 2:
+        return data.copy()
+    if np.any(np.diff(times) <= 0):
+        raise InvalidValueError("times_s", "not increasing", "strictly increasing frame times")
+    count = int(np.floor((times[-1] - times[0]) * fps + 1e-6)) + 1
+    grid = times[0] + np.arange(count) / fps
+    if count == times.shape[0] and np.allclose(grid, times, rtol=0.0, atol=1e-6):
+        return data.copy()
+    flat = data.reshape(times.shape[0], -1)
+    out = np.empty((count, flat.shape[1]))
+    for column in range(flat.shape[1]):
+        out[:, column] = np.interp(grid, times, flat[:, column])
+    return out.reshape((count, *data.shape[1:]))
 
 
 @cache

@@ -33,7 +33,7 @@ class VideoInfo:
     path: Path
     """The file."""
     fps: float
-    """Average frame rate, frames per second."""
+    """Average frame rate, frames per second (a summary: frame times come from each frame's time stamp)."""
     n_frames: int
     """Frame count declared by the container (an estimate; 0 when unknown)."""
     width: int
@@ -112,7 +112,8 @@ def probe(path: str | os.PathLike[str]) -> VideoInfo:
 def iter_frames(path: str | os.PathLike[str]) -> Iterator[tuple[float, np.ndarray]]:
     """Yield ``(timestamp_s, rgb)`` for every frame of ``path``.
 
-    ``timestamp_s`` is the presentation time in seconds from the start of the stream; ``rgb`` is an
+    ``timestamp_s`` is the frame's own presentation time (pts x time_base) in seconds from the first frame,
+    never ``index / average rate``, so a variable-frame-rate video keeps its timing; ``rgb`` is an
     (height, width, 3) uint8 C-contiguous array. Raises :class:`InvalidValueError` (field ``video``) when the
     file cannot be opened, decoding fails part-way (a truncated or corrupt file), or it holds no frame.
     """
@@ -133,6 +134,7 @@ def _iter_av(file: Path) -> Iterator[tuple[float, np.ndarray]]:
     rate = float(stream.average_rate or stream.guessed_rate or 30)
     declared = int(stream.frames or 0)
     start: float | None = None
+    previous: float | None = None
     index = 0
     packets = 0
     try:
@@ -140,9 +142,10 @@ def _iter_av(file: Path) -> Iterator[tuple[float, np.ndarray]]:
             for packet in container.demux(stream):
                 packets += packet.size > 0
                 for frame in packet.decode():
-                    time_s = frame.time
-                    if time_s is None:
-                        time_s = index / rate
+                    time_s = frame.time  # pts x time_base
+                    if time_s is None:  # no time stamp (rare raw streams): one nominal frame after the last
+                        time_s = 0.0 if previous is None else previous + 1.0 / rate
+                    previous = time_s
                     if start is None:
                         start = time_s
                     # rgb24 straight from the decoder's reformatter: one conversion, no extra copy.
@@ -174,13 +177,18 @@ def _iter_cv(file: Path) -> Iterator[tuple[float, np.ndarray]]:
 
     capture = _open_cv(file)
     rate = float(capture.get(cv2.CAP_PROP_FPS) or 30.0)
+    start: float | None = None
     index = 0
     try:
         while True:
             ok, bgr = capture.read()
             if not ok:
                 break
-            yield index / rate, np.ascontiguousarray(bgr[:, :, ::-1])
+            time_s = capture.get(cv2.CAP_PROP_POS_MSEC) / 1000.0  # the frame just read: its own time stamp
+            if index and time_s <= 0:  # a backend without time stamps
+                time_s = index / rate
+            start = time_s if start is None else start
+            yield time_s - start, np.ascontiguousarray(bgr[:, :, ::-1])
             index += 1
     finally:
         capture.release()
