@@ -1,0 +1,141 @@
+"""The runner's JSON API in process (FastAPI TestClient): a whole session, resume, double submits, replays,
+bad requests (4xx naming the value) and a locked database (503, nothing stored)."""
+
+from __future__ import annotations
+
+import sqlite3
+from pathlib import Path
+
+import pytest
+
+from mien.study.design import load_design
+from mien.study.runner import create_app
+from mien.study.stimuli import make_stimuli
+from mien.study.storage import Store, database_url
+
+DESIGN = """
+[study]
+name = "api"
+protocol = "broekens"
+completion_code = "XYZ-42"
+redirect_url = "https://example.org/back?pid={participant}"
+[stimuli]
+expressions = ["joy", "anger"]
+heads = ["builtin"]
+views = ["frontal", "lateral"]
+duration_s = 0.6
+fps = 10
+size = 48
+[design]
+within = ["view"]
+"""
+
+
+@pytest.fixture(scope="module")
+def study(tmp_path_factory: pytest.TempPathFactory) -> tuple:
+    folder = tmp_path_factory.mktemp("api-study")
+    path = folder / "design.toml"
+    path.write_text(DESIGN)
+    design = load_design(path)
+    result = make_stimuli(design, progress=False)
+    return design, result.manifest, result.manifest_path.parent
+
+
+def client_for(study: tuple, db: Path, **store_options: float):  # type: ignore[no-untyped-def]
+    from fastapi.testclient import TestClient
+
+    design, manifest, folder = study
+    store = Store(database_url(db, db), **store_options)
+    store.register_stimuli(design.name, design.protocol, manifest["stimuli"])
+    return TestClient(create_app(design, manifest, folder, store)), store
+
+
+def answers_for(session: dict, value: int = 3) -> dict[str, int]:
+    return {q["key"]: value for q in session["questions"]}
+
+
+def test_session_resume_and_idempotence(study: tuple, tmp_path: Path) -> None:
+    client, store = client_for(study, tmp_path / "db.sqlite")
+    s = client.post("/api/session", json={"participant": "P-1"}).json()
+    assert (s["participant"], s["consent_given"], s["next_position"], s["done"]) == ("P-1", False, 0, False)
+    assert len(s["sequence"]) == 4 and len(s["questions"]) == 11 and s["questions"][-1]["key"] == "naturalness"
+    assert client.get(s["sequence"][0]["url"]).content[4:8] == b"ftyp"  # the MP4 itself
+    assert client.post("/api/consent", json={"participant": "P-1"}).status_code == 200
+    first = s["sequence"][0]
+    for n in (1, 2, 2):
+        shown = client.post("/api/show", json={"participant": "P-1", "stimulus": first["stimulus"], "nr_shows": n})
+    assert shown.json() == {"nr_shows": 2}
+    body = {"participant": "P-1", "stimulus": first["stimulus"], "position": 0, "ratings": answers_for(s), "nr_shows": 2}
+    reply = client.post("/api/answer", json=body).json()
+    assert (reply["stored"], reply["next_position"], reply["done"]) == (11, 1, False)
+    assert client.post("/api/answer", json=body).json()["stored"] == 0  # double submit
+    again = client.post("/api/session", json={"participant": "P-1"}).json()  # reopened page
+    assert (again["consent_given"], again["next_position"], again["answered"]) == (True, 1, 1)
+    assert again["sequence"] == s["sequence"] and again["questions"] == s["questions"]
+    assert again["nr_shows"] == {first["stimulus"]: 2}
+    for item in s["sequence"][1:]:
+        reply = client.post(
+            "/api/answer",
+            json={"participant": "P-1", "stimulus": item["stimulus"], "position": item["position"],
+                  "ratings": answers_for(s, 4), "nr_shows": 1},
+        ).json()  # fmt: skip
+    assert reply["done"] and reply["completion_code"] == "XYZ-42"
+    assert reply["redirect_url"] == "https://example.org/back?pid=P-1"
+    frame = store.answers_frame("api")
+    assert len(frame) == 44 and frame.groupby("stimulus").size().eq(11).all()
+    assert list(frame.drop_duplicates("position")["stimulus"]) == [i["stimulus"] for i in s["sequence"]]
+    labels = frame[frame["stimulus"] == first["stimulus"]].dropna(subset=["label_position"])
+    assert list(labels["question"]) == [q["key"] for q in s["questions"][:10]]  # on-screen order stored
+    assert store.participant("api", "P-1").completed_at is not None
+    generated = client.post("/api/session", json={}).json()["participant"]
+    assert len(generated) == 12 and generated != "P-1"
+
+
+@pytest.mark.parametrize(
+    ("path", "body", "named"),
+    [
+        ("/api/session", {"participant": "a b"}, "'a b'"),
+        ("/api/consent", {"participant": "ghost"}, "'ghost'"),
+        ("/api/show", {"participant": "P", "stimulus": "s999", "nr_shows": 1}, "'s999'"),
+        ("/api/answer", {"participant": "P", "stimulus": "s001", "position": 99, "ratings": {}, "nr_shows": 1}, "99"),
+        ("/api/answer", {"participant": "P", "stimulus": "FIRST", "position": 0, "ratings": {"naturalness": 9},
+                         "nr_shows": 1}, "missing"),  # fmt: skip
+    ],
+)
+def test_bad_requests_name_the_value(study: tuple, tmp_path: Path, path: str, body: dict, named: str) -> None:
+    client, _ = client_for(study, tmp_path / "db.sqlite")
+    s = client.post("/api/session", json={"participant": "P"}).json()
+    if body.get("stimulus") == "FIRST":
+        body = {**body, "stimulus": s["sequence"][0]["stimulus"]}
+    reply = client.post(path, json=body)
+    assert 400 <= reply.status_code < 500 and named in str(reply.json()["detail"])
+    assert client.get("/api/health").status_code == 200  # the server lives on
+
+
+def test_out_of_range_rating(study: tuple, tmp_path: Path) -> None:
+    client, store = client_for(study, tmp_path / "db.sqlite")
+    s = client.post("/api/session", json={"participant": "P"}).json()
+    item = s["sequence"][0]
+    ratings = {**answers_for(s), "naturalness": 6}
+    body = {"participant": "P", "stimulus": item["stimulus"], "position": 0, "ratings": ratings, "nr_shows": 1}
+    reply = client.post("/api/answer", json=body)
+    assert reply.status_code == 422 and "naturalness=6" in reply.json()["detail"]
+    assert store.count_answers() == 0
+
+
+def test_locked_database_gives_503(study: tuple, tmp_path: Path) -> None:
+    db = tmp_path / "db.sqlite"
+    client, store = client_for(study, db, retry_s=0.01, busy_timeout_s=0.05)
+    s = client.post("/api/session", json={"participant": "P"}).json()
+    item = s["sequence"][0]
+    body = {"participant": "P", "stimulus": item["stimulus"], "position": 0, "ratings": answers_for(s), "nr_shows": 1}
+    blocker = sqlite3.connect(db, timeout=0.1)
+    blocker.execute("BEGIN EXCLUSIVE")
+    try:
+        reply = client.post("/api/answer", json=body)
+    finally:
+        blocker.rollback()
+        blocker.close()
+    assert reply.status_code == 503 and "locked or unreachable" in reply.json()["detail"]
+    assert store.count_answers() == 0
+    assert client.post("/api/answer", json=body).json()["stored"] == 11  # the page's retry then succeeds
