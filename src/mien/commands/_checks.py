@@ -48,6 +48,7 @@ __all__ = [
     "non_negative_seconds",
     "output_file",
     "output_folder",
+    "output_target",
     "parse_bytes",
     "positive_fps",
     "positive_seconds",
@@ -298,3 +299,9 @@ def check_curve_request(duration_s: float, fps: float, n_channels: int) -> None:
     >>> check_curve_request(2.0, 60.0, 80)
     """
     check_request_size(f"--duration {duration_s:g} s at --fps {fps:g}", math.ceil(duration_s * fps), 8.0 * n_channels)
+
+
+def output_target(text: str) -> Path:
+    """argparse type: a path with a suffix is a file to write (:func:`output_file`), one without a suffix a
+    folder to write into (:func:`output_folder`), e.g. a folder of PNG frames."""
+    return output_file(text) if Path(text).suffix else output_folder(text)

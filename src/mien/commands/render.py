@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from mien.commands._checks import output_target, positive_fps, positive_seconds
 from mien.commands._scene import add_scene_options, scene_from_args
 
 if TYPE_CHECKING:
@@ -23,10 +24,16 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "a PNG still (the expression's peak) or, for a path without suffix, a folder of PNG frames.",
     )
     parser.add_argument("what", nargs="+", help="emotion name, AU codes, or a clip file")
-    parser.add_argument("-o", "--output", type=Path, default=Path("mien-output/render.mp4"), help="output path")
+    parser.add_argument(
+        "-o",
+        "--output",
+        type=output_target,
+        default=Path("mien-output/render.mp4"),
+        help="output path (folders are made)",
+    )
     parser.add_argument("--intensity", type=float, default=1.2, help="emotion intensity (default %(default)s)")
-    parser.add_argument("--duration", type=float, default=2.5, help="seconds (default %(default)s)")
-    parser.add_argument("--fps", type=float, default=30.0, help="frames per second (default %(default)s)")
+    parser.add_argument("--duration", type=positive_seconds, help="seconds (default 2.5; not for a clip file)")
+    parser.add_argument("--fps", type=positive_fps, help="frames per second (default 30; not for a clip file)")
     parser.add_argument("--seed", type=int, default=0, help="idle-behaviour seed")
     parser.add_argument("--no-idle", action="store_true", help="no blinks, micro-motion, gaze or wobble")
     add_scene_options(parser)
@@ -36,15 +43,27 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def _face_clip(args: argparse.Namespace) -> tuple[Clip, np.ndarray | None, int]:
     """(face clip, feature weights or None, frame index of the peak)."""
     from mien.character import Character
-    from mien.errors import UnknownNameError
+    from mien.commands._checks import check_curve_request, missing_file_message, refuse_option
+    from mien.errors import InvalidValueError, MienError, UnknownNameError
     from mien.exchange import READERS, reader_for
+    from mien.facs.catalogue import FACE_CHANNELS
     from mien.facs.intensity import parse_au
 
     first = args.what[0]
-    if len(args.what) == 1 and Path(first).suffix.lower() in READERS and Path(first).exists():
+    if len(args.what) == 1 and (Path(first).suffix.lower() in READERS or "/" in first):
+        if not Path(first).is_file():  # a typo'd file name, not an unknown emotion
+            raise MienError(missing_file_message(Path(first), "clip file"))
+        for option, value in (("--fps", args.fps), ("--duration", args.duration)):
+            if value is not None:
+                refuse_option(option, value, "a clip file carries its own frame rate and length")
         clip = reader_for(first)(first)
+        if clip.n_frames == 0:
+            raise InvalidValueError(first, "no frames", "a clip file with at least one row of values")
         face = [j for j, name in enumerate(clip.channels) if not name.endswith("_deg")]
         return clip, None, int(abs(clip.values[:, face]).sum(axis=1).argmax()) if face else 0
+    args.fps = 30.0 if args.fps is None else args.fps
+    args.duration = 2.5 if args.duration is None else args.duration
+    check_curve_request(args.duration, args.fps, len(FACE_CHANNELS) + 128)  # curves + rig weights per frame
     basis = "feature_points" if args.basis == "feature-points" else "facs"
     character = Character(seed=args.seed, idle=not args.no_idle, expression_basis=basis)
     try:
