@@ -11,7 +11,6 @@ complete-looking report.
 from __future__ import annotations
 
 import argparse
-import base64
 import hashlib
 import html
 import importlib.metadata
@@ -22,6 +21,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from mien.htmlpage import STYLE as _STYLE
+from mien.htmlpage import img as _img
+from mien.htmlpage import num as _num
+from mien.htmlpage import pct as _pct
+from mien.htmlpage import table as _table
 
 __all__ = ["build_report", "environment", "render_html"]
 
@@ -67,25 +72,6 @@ def environment(models: Mapping[str, str | None]) -> dict[str, Any]:
         },
         "date": time.strftime("%Y-%m-%d %H:%M:%S %Z"),
     }
-
-
-def _img(path: Path, alt: str, width: str = "100%") -> str:
-    data = base64.b64encode(path.read_bytes()).decode("ascii")
-    return f'<img alt="{html.escape(alt)}" style="max-width:{width}" src="data:image/png;base64,{data}">'
-
-
-def _pct(value: float) -> str:
-    return "–" if not np.isfinite(value) else f"{value:.0%}"
-
-
-def _num(value: float, digits: int = 2) -> str:
-    return "–" if value is None or not np.isfinite(value) else f"{value:.{digits}f}"
-
-
-def _table(header: list[str], rows: list[list[str]]) -> str:
-    head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
-    body = "".join("<tr>" + "".join(f"<td>{cell}</td>" for cell in row) + "</tr>" for row in rows)
-    return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
 
 
 def _emotions_section(result: Any, folder: Path) -> str:
@@ -189,14 +175,6 @@ def _compare_section(result: Any, folder: Path) -> str:
     for png in sorted(folder.glob("*.png")):
         lines.append(_img(png, png.stem, "48%"))
     return "\n".join(lines)
-
-
-_STYLE = """
-body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1200px;color:#222}
-table{border-collapse:collapse;margin:1em 0;font-size:13px}td,th{border:1px solid #ccc;padding:3px 6px;text-align:right}
-th{background:#f0f0f0}td:first-child{text-align:left}.low{color:#b00;font-weight:bold}code{font-size:12px}
-img{display:inline-block;margin:4px;border:1px solid #ddd}pre{background:#f7f7f7;padding:8px;font-size:12px}
-"""
 
 
 def render_html(
