@@ -26,7 +26,6 @@ correction); both give the same F, degrees of freedom and p where both apply (te
 
 from __future__ import annotations
 
-import hashlib
 import math
 import os
 from collections.abc import Sequence
@@ -563,14 +562,6 @@ def _analyze_mascaro(
     )  # fmt: skip
 
 
-def _file_sha256(path: Path) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as handle:
-        for block in iter(lambda: handle.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
-
 def analyze_csv(path: str | os.PathLike[str], design_factors: Sequence[str] | None = None) -> StudyAnalysis:
     """:func:`analyze` the CSV written by ``mien study export`` (errors name the file, line and column).
 
@@ -587,4 +578,6 @@ def analyze_csv(path: str | os.PathLike[str], design_factors: Sequence[str] | No
         raise InvalidValueError(
             "answers CSV", str(file), f"a CSV file written by 'mien study export' ({reason})"
         ) from None
-    return analyze(frame, design_factors, source=str(file), source_sha256=_file_sha256(file), _from_csv=True)
+    from mien.study.stimuli import file_sha256
+
+    return analyze(frame, design_factors, source=str(file), source_sha256=file_sha256(file), _from_csv=True)
