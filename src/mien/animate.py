@@ -5,13 +5,11 @@ from __future__ import annotations
 import numpy as np
 
 from mien.errors import InvalidValueError, UnknownNameError
-from mien.facs.catalogue import FACE_CHANNELS, POSE_CHANNELS
+from mien.facs.catalogue import FACE_CHANNELS
 from mien.facs.clip import Clip
 from mien.rig.model import Rig
 
 __all__ = ["face_to_rig"]
-
-_POSE = [FACE_CHANNELS.index(name) for name in POSE_CHANNELS]
 
 
 def face_to_rig(
@@ -27,8 +25,10 @@ def face_to_rig(
     Weights come from the AU -> ARKit mapping (the shipped table, or the user table at ``mapping_path``);
     ``feature_weights`` (n, 54) metres, from a character with the ``"feature_points"`` basis, drive the
     rig's ``fp_*`` targets when it has them. Poses are head yaw/pitch/roll and gaze yaw/pitch in degrees.
+    One implementation with live streaming: this is :class:`mien.rig.driver.RigDriver` compiled for the call
+    (keep a driver to map frames tick by tick).
     """
-    from mien.rig.mapping import AUMapping
+    from mien.rig.driver import RigDriver
 
     if isinstance(frames, Clip):
         unknown = [name for name in frames.channels if name not in FACE_CHANNELS]
@@ -40,14 +40,5 @@ def face_to_rig(
         values = np.asarray(frames, dtype=np.float64)
     if values.ndim != 2 or values.shape[1] != len(FACE_CHANNELS):
         raise InvalidValueError("frames", values.shape, f"(n_frames, {len(FACE_CHANNELS)})")
-    mapping = AUMapping.from_file(mapping_path) if mapping_path else AUMapping.default()
-    weights = mapping.weights_for(rig).to_weights(values)
-    if feature_weights is not None:
-        from mien.affect.basis import feature_target_names
-
-        names = rig.target_names
-        columns = [names.index(n) if n in names else -1 for n in feature_target_names()]
-        if min(columns) < 0:
-            raise InvalidValueError("rig", rig.name, "a rig with the feature-point targets (feature_points=True)")
-        weights[:, columns] = np.asarray(feature_weights, dtype=np.float32)
-    return weights, values[:, _POSE]
+    driver = RigDriver(rig, mapping_path)
+    return driver.weights(values, feature_weights), driver.pose(values)

@@ -18,8 +18,8 @@ of a crowd. Layers, added in this order into each (62,) face frame (see
 
 AU channels are then clipped to 0..5 (a live stream must not break on an over-driven sum: the clamp is
 documented, not an error). The face at time t depends only on the seed and the commands given, so runs are
-reproducible; time must not go backwards. Small products are written as ``einsum`` so that no step goes
-through a multi-threaded BLAS (which slows small matrices down on a busy machine).
+reproducible; time must not go backwards. The per-step products go through
+:func:`~mien.small_matmul.matmul_rows`, so no step waits on a multi-threaded BLAS on a busy machine.
 """
 
 from __future__ import annotations
@@ -41,6 +41,7 @@ from mien.facs.clip import Clip
 from mien.facs.dynamics import FacsBatch, RowIndex, TimedAction
 from mien.facs.idle import IdleBatch, IdleSettings
 from mien.facs.intensity import AUSpec
+from mien.small_matmul import matmul_rows
 
 __all__ = ["EXPRESSION_BASES", "Character", "CharacterBatch"]
 
@@ -184,6 +185,7 @@ class CharacterBatch:
         self._frames = np.zeros((n, _N))
         self._expression = np.zeros((n, _N))
         self._mood_expression = np.zeros((n, _N))
+        self._fp_mood_expression = np.zeros((n, _N_FEATURES))
         self.feature_weights = np.zeros((n, _N_FEATURES))
         """(n, 54) feature-point target weights (metres) of the last step; zeros for ``"facs"`` rows."""
         self._t_s: float | None = None
@@ -231,6 +233,7 @@ class CharacterBatch:
             self._frames = np.zeros((row + 1, _N))
             self._expression = np.zeros((row + 1, _N))
             self._mood_expression = np.zeros((row + 1, _N))
+            self._fp_mood_expression = np.zeros((row + 1, _N_FEATURES))
             self.feature_weights = np.zeros((row + 1, _N_FEATURES))
         self.seeds[row] = value
         self._active[row] = True
@@ -268,10 +271,10 @@ class CharacterBatch:
                     raise TypeError
         except (TypeError, ValueError):
             raise InvalidValueError("rows", rows, "an int, a slice or an int array of character rows") from None
+        if isinstance(rows, slice):
+            return ids[self._active[ids]]  # a slice selects the active rows in it
         if ids.size and (ids.min() < 0 or ids.max() >= n or not self._active[ids].all()):
             raise InvalidValueError("rows", rows, f"active rows (see active_rows(): {self.active_rows().tolist()})")
-        if isinstance(rows, slice):
-            ids = ids[self._active[ids]]
         return ids.astype(np.intp)
 
     # ------------------------------------------------------------------ commands
@@ -395,12 +398,12 @@ class CharacterBatch:
         emotion = emotions.advance(t)
         if not emotions.quiet or emotion.any() or emotions.mood.any():
             emotion, shown = emotions.expressed(t)
-            expression = np.einsum("ne,ec->nc", emotion, self._basis, out=self._expression)
-            expression += np.einsum("ne,ec->nc", shown, self._mood_basis, out=self._mood_expression)
+            expression = matmul_rows(emotion, self._basis, self._expression)
+            expression += matmul_rows(shown, self._mood_basis, self._mood_expression)
             if self._has_features:
                 features = self._features
-                np.einsum("ne,ec->nc", emotion, self._fp_basis, out=self.feature_weights)
-                self.feature_weights += np.einsum("ne,ec->nc", shown, self._fp_mood_basis)
+                matmul_rows(emotion, self._fp_basis, self.feature_weights)
+                self.feature_weights += matmul_rows(shown, self._fp_mood_basis, self._fp_mood_expression)
                 self.feature_weights[~features] = 0.0
                 expression[features] = 0.0
             frames += saturate(expression)

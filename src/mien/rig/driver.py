@@ -1,0 +1,126 @@
+"""A compiled rig driver: face frames -> morph-target weights and head/gaze pose, every tick.
+
+:class:`RigDriver` parses the AU -> blendshape table once (:class:`~mien.rig.mapping.AUMapping`, reordered to
+the rig's targets) into one float32 matrix. A tick is a product in row chunks that BLAS keeps on the calling
+thread (:func:`mien.small_matmul.matmul_rows`: a busy machine's threads cannot slow it down) and a clip, into
+buffers kept between calls (nothing allocated once the batch size is stable). :func:`mien.animate.face_to_rig`
+uses it, so offline rendering and live streaming share one implementation.
+
+>>> import numpy as np
+>>> from mien.facs.catalogue import FACE_CHANNELS, au_channels
+>>> driver = RigDriver()                       # no rig: the 52 ARKit targets
+>>> frames = np.zeros((2, len(FACE_CHANNELS)))
+>>> frames[1, list(au_channels(12))] = 5.0
+>>> weights = driver.weights(frames)
+>>> weights.shape, float(weights[1, driver.target_names.index("mouthSmileLeft")])
+((2, 52), 1.0)
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from mien.errors import InvalidValueError
+from mien.facs.catalogue import FACE_CHANNELS, POSE_CHANNELS
+from mien.rig.mapping import AUMapping
+from mien.rig.model import Rig
+from mien.small_matmul import matmul_rows
+
+__all__ = ["POSE_COLUMNS", "RigDriver"]
+
+POSE_COLUMNS: tuple[str, ...] = POSE_CHANNELS
+"""Columns of :meth:`RigDriver.pose`: head yaw, pitch, roll and gaze yaw, pitch, in degrees."""
+
+_N = len(FACE_CHANNELS)
+_POSE = np.array([FACE_CHANNELS.index(name) for name in POSE_CHANNELS], np.intp)
+
+
+class RigDriver:
+    """Face frames -> (weights, pose) for one rig, with the mapping parsed once.
+
+    ``rig``: the :class:`~mien.rig.model.Rig` whose ``target_names`` order the weight columns (targets the
+    mapping drives but the rig lacks are dropped with a warning, once); ``None`` gives the mapping's own targets
+    (the 52 ARKit names for the shipped table). ``mapping_path``: a user's AU -> target table (see
+    :meth:`AUMapping.from_file`); default the shipped table.
+    """
+
+    def __init__(self, rig: Rig | None = None, mapping_path: str | os.PathLike[str] | None = None) -> None:
+        mapping = AUMapping.from_file(mapping_path) if mapping_path else AUMapping.default()
+        if rig is not None:
+            mapping = mapping.weights_for(rig)
+        self.mapping = mapping
+        """The parsed mapping, columns in :attr:`target_names` order."""
+        self.rig_name = rig.name if rig is not None else ""
+        """Name of the rig (empty without one)."""
+        self.target_names = mapping.target_names
+        """Weight columns, one per target."""
+        self._matrix = np.ascontiguousarray(mapping.matrix, dtype=np.float32)
+        from mien.affect.basis import feature_target_names
+
+        names = self.target_names
+        columns = [names.index(name) if name in names else -1 for name in feature_target_names()]
+        self._feature_columns = np.array(columns, np.intp) if min(columns) >= 0 else None
+        self._frames32 = np.zeros((0, _N), np.float32)
+
+    @property
+    def n_targets(self) -> int:
+        """Number of weight columns."""
+        return len(self.target_names)
+
+    @property
+    def has_feature_targets(self) -> bool:
+        """Whether the rig has the 54 feature-point targets ``fp_*`` (driven by ``feature_weights``)."""
+        return self._feature_columns is not None
+
+    def _check_frames(self, frames: np.ndarray) -> np.ndarray:
+        values = np.asarray(frames, dtype=np.float64)
+        if values.ndim != 2 or values.shape[1] != _N:
+            raise InvalidValueError("frames", f"array of shape {values.shape}", f"(n_frames, {_N}) face frames")
+        return values
+
+    def weights(
+        self, frames: np.ndarray, feature_weights: np.ndarray | None = None, out: np.ndarray | None = None
+    ) -> np.ndarray:
+        """(n, n_targets) float32 weights in [0, 1] for (n, 62) face frames (pose channels ignored).
+
+        Each target is ``sum(intensity * weight_at_E / 5)`` over its AU channels, clipped to [0, 1] (see
+        :mod:`mien.rig.mapping`). ``feature_weights`` (n, 54) metres, from ``"feature_points"`` characters, are
+        written to the rig's ``fp_*`` targets (unclipped: they are signed distances). ``out``: a C-contiguous
+        (n, n_targets) float32 array to fill (nothing is allocated then, once the batch size is stable).
+        """
+        values = self._check_frames(frames)
+        n = values.shape[0]
+        if out is None:
+            out = np.empty((n, self.n_targets), np.float32)
+        elif out.shape != (n, self.n_targets) or out.dtype != np.float32:
+            raise InvalidValueError(
+                "out", f"{out.dtype} array of shape {out.shape}", f"float32 ({n}, {self.n_targets})"
+            )
+        if self._frames32.shape[0] != n:
+            self._frames32 = np.empty((n, _N), np.float32)
+        np.copyto(self._frames32, values, casting="same_kind")
+        matmul_rows(self._frames32, self._matrix, out)  # pose rows of the matrix are zero
+        np.clip(out, 0.0, 1.0, out=out)
+        if feature_weights is not None:
+            if self._feature_columns is None:
+                raise InvalidValueError(
+                    "rig", self.rig_name or "(none)", "a rig with the feature-point targets (feature_points=True)"
+                )
+            features = np.asarray(feature_weights)
+            if features.shape != (n, self._feature_columns.size):
+                raise InvalidValueError(
+                    "feature_weights", f"array of shape {features.shape}", f"({n}, {self._feature_columns.size}) metres"
+                )
+            out[:, self._feature_columns] = features
+        return out
+
+    def pose(self, frames: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """(n, 5) float64 head yaw/pitch/roll and gaze yaw/pitch in degrees (:data:`POSE_COLUMNS`), into ``out``."""
+        values = self._check_frames(frames)
+        if out is None:
+            out = np.empty((values.shape[0], _POSE.size))
+        elif out.shape != (values.shape[0], _POSE.size) or out.dtype != np.float64:
+            raise InvalidValueError("out", f"{out.dtype} array of shape {out.shape}", f"float64 ({values.shape[0]}, 5)")
+        return np.take(values, _POSE, axis=1, out=out)
