@@ -1,0 +1,286 @@
+"""The CLI contract, swept over every subcommand: a user's mistake is exit code 2 and one line on stderr that
+names the value, never a traceback.
+
+Every subcommand registered by ``mien.commands.COMMAND_MODULES`` must have rows in :data:`CASES` (a new
+command that has none fails :func:`test_every_subcommand_has_rows`). Placeholders in an argv: ``{d}`` is a
+folder prepared by :func:`inputs` (good and bad input files, and ``some_file.txt``, a file under which no
+output can be written, even as root).
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+from mien.cli import build_parser, main
+
+
+@dataclass(frozen=True)
+class Case:
+    """One bad input of one subcommand."""
+
+    command: str
+    """The subcommand (first word after ``mien``)."""
+    kind: str
+    """What is wrong (missing file, typo, zero fps...)."""
+    argv: tuple[str, ...]
+    """Arguments after ``mien``; ``{d}`` is the prepared folder."""
+    expect: tuple[str, ...]
+    """Substrings of the one-line message (the value named, the suggestion...)."""
+
+
+def case(command: str, kind: str, argv: str, *expect: str) -> Case:
+    """A row: ``argv`` is split on spaces."""
+    return Case(command, kind, tuple(argv.split()), expect)
+
+
+UNDER_FILE = "{d}/some_file.txt/out"
+"""A destination under a regular file: no folder can be made there, not even by root."""
+
+CASES: list[Case] = [
+    # demo
+    case("demo", "zero fps", "demo --fps 0 -o {d}/demo", "--fps", "'0'", "> 0"),
+    case("demo", "negative fps", "demo --fps -30 -o {d}/demo", "'-30'"),
+    case("demo", "nan fps", "demo --fps nan -o {d}/demo", "'nan'", "not finite"),
+    case("demo", "output under a file", f"demo -o {UNDER_FILE}", "some_file.txt is a file"),
+    case("demo", "output folder is a file", "demo -o {d}/some_file.txt", "some_file.txt is a file: give a folder"),
+    case("demo", "read-only destination", "demo -o /proc/mien-test/out", "cannot write in /proc/mien-test"),
+    case("demo", "huge request", "demo --fps 1e9 -o {d}/demo", "fps 1e+09", "2 GiB", "MIEN_MAX_REQUEST_BYTES"),
+    case("demo", "unknown option", "demo --fsp 30", "--fsp"),
+    # emote
+    case("emote", "zero fps", "emote joy --fps 0", "--fps", "'0'"),
+    case("emote", "negative fps", "emote joy --fps -1", "'-1'"),
+    case("emote", "infinite fps", "emote joy --fps inf", "'inf'"),
+    case("emote", "zero duration", "emote joy --duration 0", "--duration", "'0'"),
+    case("emote", "negative duration", "emote joy --duration -2", "'-2'"),
+    case("emote", "negative hold", "emote joy --hold -1", "--hold", "'-1'"),
+    case("emote", "not a number", "emote joy --onset soon", "'soon'"),
+    case("emote", "output under a file", f"emote joy -o {UNDER_FILE}.csv", "some_file.txt is a file"),
+    case("emote", "read-only destination", "emote joy -o /proc/mien-test/joy.csv", "/proc/mien-test"),
+    case("emote", "output is a folder", "emote joy -o {d}", "is an existing folder"),
+    case("emote", "plot under a file", f"emote joy --plot {UNDER_FILE}.png", "--plot", "some_file.txt"),
+    case("emote", "huge request", "emote joy --duration 1e7 --fps 1000", "--duration 1e+07", "2 GiB"),
+    case("emote", "unknown emotion", "emote glee", "unknown emotion 'glee'"),
+    # au
+    case("au", "zero fps", "au AU12 --fps 0", "'0'"),
+    case("au", "negative duration", "au AU12 --duration -1", "'-1'"),
+    case("au", "zero time constant", "au AU12 --tau 0", "--tau", "'0'"),
+    case("au", "negative play time", "au AU12 --play 0.2 -1 0.2", "--play", "'-1'"),
+    case("au", "huge request", "au AU12 --duration 1e8", "2 GiB"),
+    case("au", "output under a file", f"au AU12 -o {UNDER_FILE}.json", "some_file.txt is a file"),
+    case("au", "unknown action unit", "au AU99", "AU99"),
+    # render
+    case("render", "typo in a file name", "render {d}/smlie.csv", "no such clip file", "did you mean", "smile.csv"),
+    case("render", "missing folder", "render {d}/nofolder/smile.csv", "folder", "nofolder", "does not exist"),
+    case("render", "empty file", "render {d}/empty.csv -o {d}/r.png", "empty.csv"),
+    case("render", "header-only CSV", "render {d}/header_only.csv -o {d}/r.png", "header_only.csv"),
+    case("render", "NaN cell", "render {d}/nan.csv -o {d}/r.png", "nan.csv", "line 3"),
+    case("render", "unsorted time", "render {d}/unsorted.csv -o {d}/r.png", "unsorted.csv", "line 4"),
+    case("render", "zero fps", "render joy --fps 0", "--fps", "'0'"),
+    case("render", "negative duration", "render joy --duration -1", "'-1'"),
+    case("render", "fps with a clip file", "render {d}/smile.csv --fps 30 -o {d}/r.png", "--fps", "own frame rate"),
+    case("render", "output under a file", f"render joy -o {UNDER_FILE}.png", "some_file.txt is a file"),
+    case("render", "huge request", "render joy --duration 1e9", "2 GiB"),
+    # assets
+    case("assets", "unknown asset", "assets fetch ict-facekti", "ict-facekti", "ict-facekit"),
+    case("assets", "zero timeout", "assets fetch ict-facekit --timeout 0", "--timeout", "'0'"),
+    case("assets", "bad hash", "assets fetch ict-facekit --sha256 xyz --dest {d}/ict", "sha256='xyz'", "64 hex"),
+    case(
+        "assets",
+        "unreachable URL",
+        "assets fetch ict-facekit --url http://127.0.0.1:1/x.zip --dest {d}/ict",
+        "127.0.0.1:1",
+        "--url",
+    ),
+    # track
+    case("track", "missing file", "track {d}/nothing.mp4", "no such file", "nothing.mp4"),
+    case("track", "typo in a file name", "track {d}/clpi.mp4", "did you mean", "clip.mp4"),
+    case("track", "empty file", "track {d}/empty.mp4", "empty.mp4 is empty"),
+    case("track", "negative gap", "track {d}/clip.mp4 --max-gap-s -1", "--max-gap-s", "'-1'"),
+    case("track", "output under a file", f"track {{d}}/clip.mp4 -o {UNDER_FILE}.npz", "some_file.txt is a file"),
+    case("track", "wrong output format", "track {d}/clip.mp4 -o {d}/track.txt", "track.txt", ".npz or .json"),
+    # learn
+    case(
+        "learn",
+        "typo in a folder name",
+        "learn {d}/vidoes --labels {d}/labels.csv -o {d}/lib.npz",
+        "no such folder",
+        "did you mean",
+        "videos",
+    ),
+    case(
+        "learn",
+        "typo in the labels",
+        "learn {d}/videos --labels {d}/lables.csv -o {d}/lib.npz",
+        "did you mean",
+        "labels.csv",
+    ),
+    case("learn", "empty labels", "learn {d}/videos --labels {d}/empty.csv -o {d}/lib.npz", "empty.csv is empty"),
+    case(
+        "learn",
+        "header-only labels",
+        "learn {d}/videos --labels {d}/labels_header.csv -o {d}/lib.npz --workers 0",
+        "labels",
+        "no rows",
+    ),
+    case(
+        "learn",
+        "unreachable Dask scheduler",
+        "learn {d}/videos --labels {d}/labels.csv -o {d}/lib.npz --scheduler tcp://127.0.0.1:1",
+        "tcp://127.0.0.1:1",
+        "reachable Dask scheduler",
+    ),
+    case(
+        "learn",
+        "malformed scheduler address",
+        "learn {d}/videos --labels {d}/labels.csv -o {d}/lib.npz --scheduler nowhere",
+        "'nowhere'",
+    ),
+    case(
+        "learn",
+        "workers with a scheduler",
+        "learn {d}/videos --labels {d}/labels.csv -o {d}/lib.npz --scheduler tcp://127.0.0.1:1 --workers 2",
+        "--workers",
+    ),
+    case(
+        "learn",
+        "output under a file",
+        f"learn {{d}}/videos --labels {{d}}/labels.csv -o {UNDER_FILE}.npz",
+        "some_file.txt is a file",
+    ),
+    # laugh
+    case("laugh", "zero fps", "laugh sly_smile --fps 0", "'0'"),
+    case("laugh", "negative duration", "laugh sly_smile --duration -3", "'-3'"),
+    case("laugh", "typo in a file name", "laugh sly_smile --library {d}/libary.npz", "did you mean", "library.npz"),
+    case("laugh", "empty file", "laugh sly_smile --library {d}/empty.csv", "empty.csv is empty"),
+    case("laugh", "not a library", "laugh sly_smile --library {d}/smile.csv", "smile.csv"),
+    case("laugh", "huge request", "laugh sly_smile --duration 1e8", "2 GiB"),
+    case("laugh", "output under a file", f"laugh sly_smile -o {UNDER_FILE}.csv", "some_file.txt is a file"),
+    case("laugh", "option that does not apply", "laugh sly_smile --curves controllers", "--curves", "-o FILE"),
+    case("laugh", "unknown type", "laugh giggle_fit", "giggle_fit"),
+    # validate
+    case("validate", "typo in a file name", "validate compare {d}/clpi.mp4", "did you mean", "clip.mp4"),
+    case("validate", "missing folder", "validate rig --human-data {d}/humans", "no such folder", "humans"),
+    case("validate", "output under a file", f"validate rig -o {UNDER_FILE}", "some_file.txt is a file"),
+    case("validate", "bad list", "validate emotions --intensities 1.2,lots", "intensities", "1.2,lots"),
+    # serve
+    case("serve", "zero tick rate", "serve --tick-hz 0 --check", "--tick-hz", "0"),
+    case("serve", "negative tick rate", "serve --tick-hz -5 --check", "-5"),
+    case("serve", "bad port", "serve --udp-port -1 --check", "--udp-port", "-1"),
+    # send
+    case("send", "NaN intensity", "send --au AU12=nan", "AU12=nan"),
+    case("send", "unreachable server", "send --au AU12=3 --ws --port 1", "127.0.0.1:1"),
+    # study
+    case("study", "missing design", "study stimuli {d}/desing.toml", "desing.toml"),
+    case("study", "not a design", "study stimuli {d}/smile.csv", "smile.csv"),
+]
+"""The table of bad inputs (see the module docstring)."""
+
+
+@pytest.fixture
+def inputs(tmp_path: Path) -> Path:
+    """A folder of good and bad input files."""
+    (tmp_path / "smile.csv").write_text("time_s,AU12L,AU12R\n0,0,0\n0.5,4,4\n1.0,0,0\n")
+    (tmp_path / "empty.csv").touch()
+    (tmp_path / "header_only.csv").write_text("time_s,AU12L,AU12R\n")
+    (tmp_path / "nan.csv").write_text("time_s,AU12L\n0,0\n0.5,nan\n1.0,0\n")
+    (tmp_path / "unsorted.csv").write_text("time_s,AU12L\n0,0\n1.0,1\n0.5,0\n")
+    (tmp_path / "some_file.txt").write_text("a file, not a folder\n")
+    (tmp_path / "clip.mp4").write_bytes(b"\0\0\0\x18ftypmp42" + b"\0" * 64)  # named right; never decoded here
+    (tmp_path / "empty.mp4").touch()
+    (tmp_path / "library.npz").write_bytes(b"PK\x03\x04")
+    (tmp_path / "videos").mkdir()
+    (tmp_path / "labels.csv").write_text("video,type,performer\nclip.mp4,laughter,p1\n")
+    (tmp_path / "labels_header.csv").write_text("video,type,performer\n")
+    return tmp_path
+
+
+def _registered() -> set[str]:
+    import argparse
+
+    parser = build_parser()
+    (action,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    return set(action.choices)
+
+
+def test_every_subcommand_has_rows() -> None:
+    """A subcommand without a row in the table fails here: new commands must join the sweep."""
+    missing = _registered() - {c.command for c in CASES}
+    assert not missing, f"add bad-input rows to CASES for: {', '.join(sorted(missing))}"
+
+
+def _run(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str]:
+    code = main(argv)
+    return code, capsys.readouterr().err
+
+
+@pytest.mark.parametrize("row", CASES, ids=[f"{c.command}-{c.kind.replace(' ', '_')}" for c in CASES])
+def test_bad_input_is_exit_2_and_one_line(row: Case, inputs: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    if row.command not in _registered():
+        pytest.skip(f"mien {row.command} is not built in this checkout")
+    argv = [part.replace("{d}", str(inputs)) for part in row.argv]
+    code, err = _run(argv, capsys)
+    assert code == 2, f"exit {code} for mien {' '.join(argv)}; stderr: {err}"
+    assert "Traceback" not in err
+    assert err.endswith("\n") and err.count("\n") == 1, f"not one line: {err!r}"
+    assert err.startswith("mien"), err
+    for text in row.expect:
+        assert text.replace("{d}", str(inputs)) in err, f"{text!r} not in {err!r}"
+
+
+def test_output_folders_are_created(inputs: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The output policy: missing output folders are made, in every command that writes files."""
+    targets = {
+        "emote": [
+            "emote",
+            "joy",
+            "--duration",
+            "0.5",
+            "-o",
+            f"{inputs}/a/b/joy.csv",
+            "--plot",
+            f"{inputs}/p/q/joy.png",
+        ],
+        "au": ["au", "AU12", "--duration", "0.5", "-o", f"{inputs}/c/d/au.json"],
+        "laugh": ["laugh", "sly_smile", "--duration", "0.5", "-o", f"{inputs}/e/f/laugh.npz"],
+    }
+    for argv in targets.values():
+        assert main(argv) == 0, capsys.readouterr().err
+    for path in ("a/b/joy.csv", "p/q/joy.png", "c/d/au.json", "e/f/laugh.npz"):
+        assert (inputs / path).stat().st_size > 0, path
+
+
+def test_the_request_limit_can_be_raised(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+    monkeypatch.setenv("MIEN_MAX_REQUEST_BYTES", "1MiB")
+    assert main(["emote", "joy", "--duration", "60", "--fps", "60", "-o", "/dev/null.csv"]) == 2
+    err = capsys.readouterr().err
+    assert "at most 1 MiB" in err
+    monkeypatch.setenv("MIEN_MAX_REQUEST_BYTES", "lots")
+    assert main(["emote", "joy"]) == 2
+    assert "MIEN_MAX_REQUEST_BYTES='lots'" in capsys.readouterr().err
+
+
+def _mien(*argv: str) -> subprocess.Popen[bytes]:
+    return subprocess.Popen([sys.executable, "-m", "mien.cli", *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+
+
+def test_closed_pipe_as_a_real_pipe() -> None:
+    """``mien emote joy --duration 300 | head -1``: exit 2, one line naming the pipe, no traceback."""
+    process = _mien("emote", "joy", "--duration", "300", "--no-idle")  # 18,000 lines overflow the pipe buffer
+    assert process.stdout is not None and process.stderr is not None
+    assert process.stdout.readline().startswith(b"time_s")
+    process.stdout.close()
+    err = process.stderr.read().decode()
+    assert process.wait(timeout=60) == 2
+    assert err == "mien emote: error: output pipe closed; files already written are kept\n"
+
+
+def test_smoke_subprocess_bad_fps() -> None:
+    """The installed entry point behaves as in-process: exit 2, one line, nothing on stdout."""
+    out, err = _mien("emote", "joy", "--fps", "0").communicate(timeout=60)
+    assert out == b""
+    assert err.decode().count("\n") == 1 and "argument --fps: fps '0' must be > 0" in err.decode()
