@@ -121,7 +121,7 @@ def test_machine_judgement_of_rendered_stimuli(tmp_path: Path, landmarker_path: 
     assert "human quality (this study)" in page and str(landmarker_path) in page
     # a changed video: a clear error naming it, and the report says why the machine did not run
     (folder / "s002.mp4").write_bytes(b"not a video")
-    with pytest.raises(InvalidValueError, match="s002.mp4"):
+    with pytest.raises(InvalidValueError, match=r"s002\.mp4"):
         judge_stimuli(folder, landmarker=landmarker_path, emotion_model=emotion_model_path)
     page = write_report(analysis, tmp_path / "out2", stimuli=folder, landmarker=landmarker_path).read_text()
     assert "Not run: stimulus file" in page and "s002.mp4" in page
