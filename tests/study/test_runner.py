@@ -139,3 +139,30 @@ def test_locked_database_gives_503(study: tuple, tmp_path: Path) -> None:
     assert reply.status_code == 503 and "locked or unreachable" in reply.json()["detail"]
     assert store.count_answers() == 0
     assert client.post("/api/answer", json=body).json()["stored"] == 11  # the page's retry then succeeds
+
+
+def test_export_and_analyze_commands(study: tuple, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from mien.cli import main
+    from mien.study.export import read_answers_csv
+
+    design, _, folder = study
+    db = tmp_path / "db.sqlite"
+    client, store = client_for(study, db)
+    for k in range(3):
+        s = client.post("/api/session", json={"participant": f"P{k}"}).json()
+        for item in s["sequence"]:
+            ratings = {q["key"]: 1 + (i + k + item["position"]) % 5 for i, q in enumerate(s["questions"])}
+            body = {"participant": f"P{k}", "stimulus": item["stimulus"], "position": item["position"],
+                    "ratings": ratings, "nr_shows": 1}  # fmt: skip
+            assert client.post("/api/answer", json=body).status_code == 200
+    out = tmp_path / "answers.csv"
+    args = [str(design.path), "--db", str(db), "--stimuli", str(folder)]
+    assert main(["study", "export", *args, "--out", str(out)]) == 0
+    assert "wrote 132 answers" in capsys.readouterr().out
+    frame = read_answers_csv(out)
+    assert frame.equals(store.answers_frame("api"))
+    report = tmp_path / "report"
+    assert main(["study", "analyze", *args, "--answers", str(out), "--out", str(report)]) == 0
+    assert (report / "report.html").is_file()
+    assert main(["study", "analyze", str(design.path), "--db", str(tmp_path / "empty.sqlite")]) == 2
+    assert "at least one stored answer" in capsys.readouterr().err

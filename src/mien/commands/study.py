@@ -138,8 +138,9 @@ def run_analyze(args: argparse.Namespace) -> int:
     from mien.study.report import write_report
 
     design = _design(args)
+    factors = list(design.within) or None
     if args.answers is not None:
-        result = analyze_csv(args.answers)
+        result = analyze_csv(args.answers, factors)
     else:
         with _store(args, design) as store:
             frame = store.answers_frame(design.name)
@@ -149,7 +150,7 @@ def run_analyze(args: argparse.Namespace) -> int:
             raise InvalidValueError(
                 "answers", 0, f"at least one stored answer of study {design.name!r} (run `mien study serve` first)"
             )
-        result = analyze(frame, source=str(args.db or design.name))
-    path = write_report(result, args.out, stimuli=_stimuli_folder(args, design))
+        result = analyze(frame, factors, source=str(args.db or design.name))
+    path = write_report(result, args.out, stimuli=_stimuli_folder(args, design), progress=True)
     print(f"report: {path}")
     return 0
