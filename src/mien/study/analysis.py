@@ -418,9 +418,13 @@ def _statsmodels(frame: pd.DataFrame, within: list[str], back: dict[str, str]) -
     )
 
 
-def _default_factors(frame: pd.DataFrame, protocol: str) -> list[str]:
+def _default_factors(frame: pd.DataFrame, protocol: str) -> tuple[list[str], list[str]]:
+    """``(within, between)``: varied factor columns that some participant saw at two or more levels, and those
+    every participant saw at one level only (between-subject: not a factor of the repeated-measures ANOVA)."""
     varied = [c for c in _factor_columns(frame) if c not in _NOT_WITHIN and frame[c].nunique() > 1]
-    return ["expression", *varied] if protocol == "mascaro" else varied
+    within = [c for c in varied if int(frame.groupby("participant")[c].nunique().max()) > 1]
+    between = [c for c in varied if c not in within]
+    return (["expression", *within] if protocol == "mascaro" else within), between
 
 
 def _label_order(questions: Sequence[str]) -> list[str]:
@@ -448,15 +452,22 @@ def analyze(
     """Analyse one study's long answers table (see the module docstring for what is computed).
 
     ``design_factors``: the within-subject factors of the ANOVAs (columns of the table; ``"expression"``
-    allowed). Default: every design-factor column with more than one level (Mascaró: the laughter type, as
-    ``expression``, first). An unknown name raises :class:`~mien.errors.UnknownNameError`; a bad table
-    :class:`~mien.errors.InvalidValueError` (see :func:`check_answers`).
+    allowed). Default: every design-factor column that some participant answered at two or more levels
+    (Mascaró: the laughter type, as ``expression``, first); factors each participant saw at one level only are
+    between-subject and named in :attr:`StudyAnalysis.notes`. An unknown name raises
+    :class:`~mien.errors.UnknownNameError`; a bad table :class:`~mien.errors.InvalidValueError` (see
+    :func:`check_answers`).
     """
     checked = check_answers(answers, source, from_csv=_from_csv)
     protocol = str(checked["protocol"].iloc[0])
     factor_columns = _factor_columns(checked)
+    notes: list[str] = []
     if design_factors is None:
-        factors = _default_factors(checked, protocol)
+        factors, between = _default_factors(checked, protocol)
+        if between:
+            notes.append(
+                f"between-subject factors (each participant saw one level), not in the rm-ANOVA: {', '.join(between)}"
+            )
     else:
         factors = list(design_factors)
         for name in factors:
@@ -466,7 +477,6 @@ def analyze(
     trials = trials_frame(checked)
     n_participants = int(checked["participant"].nunique())
     study = str(checked["study"].iloc[0])
-    notes: list[str] = []
     if protocol == "broekens":
         return _analyze_broekens(
             checked, trials, factors, levels, study, n_participants, source, source_sha256, notes
