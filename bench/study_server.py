@@ -33,7 +33,8 @@ DESIGN = """
 name = "bench"
 protocol = "broekens"
 [stimuli]
-expressions = ["joy", "sadness", "anger", "fear", "surprise", "disgust", "evil", "furious", "enthusiastic", "frustrated"]
+expressions = ["joy", "sadness", "anger", "fear", "surprise", "disgust",
+               "evil", "furious", "enthusiastic", "frustrated"]
 heads = ["builtin"]
 duration_s = 0.5
 fps = 10
@@ -127,7 +128,9 @@ def start_postgres(folder: Path) -> tuple[str, list[str], str] | None:
         shutil.chown(folder, "postgres")
         as_user = ["runuser", "-u", "postgres", "--"]
     data, port = folder / "data", free_port()
-    subprocess.run([*as_user, initdb, "-D", str(data), "-U", "postgres", "-A", "trust"], check=True, capture_output=True)
+    subprocess.run(
+        [*as_user, initdb, "-D", str(data), "-U", "postgres", "-A", "trust"], check=True, capture_output=True
+    )
     options = f"-p {port} -h 127.0.0.1 -k {folder} -c max_connections=200"
     subprocess.run(
         [*as_user, pg_ctl, "-D", str(data), "-o", options, "-l", str(folder / "log"), "-w", "start"],

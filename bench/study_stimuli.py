@@ -25,7 +25,8 @@ FULL = """
 name = "broekens-full"
 protocol = "broekens"
 [stimuli]
-expressions = ["joy", "sadness", "anger", "fear", "surprise", "disgust", "evil", "furious", "enthusiastic", "frustrated"]
+expressions = ["joy", "sadness", "anger", "fear", "surprise", "disgust",
+               "evil", "furious", "enthusiastic", "frustrated"]
 heads = ["default"]
 bases = ["facs", "feature_points"]
 views = ["frontal", "lateral"]
@@ -38,13 +39,18 @@ size = 256
 within = ["basis", "view", "distance_m", "intensity"]
 """
 
-SMALL = FULL.replace(
-    '"joy", "sadness", "anger", "fear", "surprise", "disgust", "evil", "furious", "enthusiastic", "frustrated"',
-    '"joy", "anger", "evil"',
-).replace('bases = ["facs", "feature_points"]', 'bases = ["facs"]').replace(
-    'views = ["frontal", "lateral"]', 'views = ["frontal"]'
-).replace("distances_m = [1.0, 3.0]", "distances_m = [1.0]")
-"""6 stimuli: 3 expressions x 2 intensities (one head, basis and camera)."""
+SMALL = """
+[study]
+name = "broekens-small"
+[stimuli]
+expressions = ["joy", "anger", "evil"]
+heads = ["default"]
+intensities = [1.2, 2.4]
+duration_s = 3.0
+fps = 30
+size = 256
+"""
+"""6 stimuli: 3 expressions x 2 intensities (one head, the FACS basis, the frontal 1 m camera)."""
 
 BUDGET_S = 600.0
 REPEATS = 3
@@ -91,8 +97,12 @@ def main() -> None:
             base.append(baseline_render_clip(small, folder / f"base{r}"))
         n = len(small.stimuli)
         print(f"per stimulus (3 s, 90 frames, 256 px), {n} stimuli, median of {REPEATS} interleaved repeats:")
-        print(f"  make_stimuli            {statistics.median(ours) / n:6.2f} s  ({min(ours) / n:.2f}..{max(ours) / n:.2f})")
-        print(f"  baseline render_clip    {statistics.median(base) / n:6.2f} s  ({min(base) / n:.2f}..{max(base) / n:.2f})")
+        print(
+            f"  make_stimuli          {statistics.median(ours) / n:6.2f} s  ({min(ours) / n:.2f}..{max(ours) / n:.2f})"
+        )
+        print(
+            f"  baseline render_clip  {statistics.median(base) / n:6.2f} s  ({min(base) / n:.2f}..{max(base) / n:.2f})"
+        )
         print(f"  ratio baseline / make_stimuli: {statistics.median(base) / statistics.median(ours):.2f}x")
 
         full_path = folder / "full.toml"

@@ -22,7 +22,8 @@ completion_code = "C0DE"
 redirect_url = "https://example.org/done?p={participant}"
 [stimuli]
 source = "render"
-expressions = ["joy", "sadness", "anger", "fear", "surprise", "disgust", "evil", "furious", "enthusiastic", "frustrated"]
+expressions = ["joy", "sadness", "anger", "fear", "surprise", "disgust",
+               "evil", "furious", "enthusiastic", "frustrated"]
 heads = ["default"]
 bases = ["facs", "feature_points"]
 views = ["frontal", "lateral"]
@@ -112,7 +113,7 @@ def test_cli_bad_design_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture[str
 
 
 def test_missing_design_file(tmp_path: Path) -> None:
-    with pytest.raises(MissingAssetError, match="nope.toml"):
+    with pytest.raises(MissingAssetError, match=r"nope\.toml"):
         load_design(tmp_path / "nope.toml")
 
 

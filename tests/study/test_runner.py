@@ -65,7 +65,13 @@ def test_session_resume_and_idempotence(study: tuple, tmp_path: Path) -> None:
     for n in (1, 2, 2):
         shown = client.post("/api/show", json={"participant": "P-1", "stimulus": first["stimulus"], "nr_shows": n})
     assert shown.json() == {"nr_shows": 2}
-    body = {"participant": "P-1", "stimulus": first["stimulus"], "position": 0, "ratings": answers_for(s), "nr_shows": 2}
+    body = {
+        "participant": "P-1",
+        "stimulus": first["stimulus"],
+        "position": 0,
+        "ratings": answers_for(s),
+        "nr_shows": 2,
+    }
     reply = client.post("/api/answer", json=body).json()
     assert (reply["stored"], reply["next_position"], reply["done"]) == (11, 1, False)
     assert client.post("/api/answer", json=body).json()["stored"] == 0  # double submit
@@ -98,8 +104,11 @@ def test_session_resume_and_idempotence(study: tuple, tmp_path: Path) -> None:
         ("/api/consent", {"participant": "ghost"}, "'ghost'"),
         ("/api/show", {"participant": "P", "stimulus": "s999", "nr_shows": 1}, "'s999'"),
         ("/api/answer", {"participant": "P", "stimulus": "s001", "position": 99, "ratings": {}, "nr_shows": 1}, "99"),
-        ("/api/answer", {"participant": "P", "stimulus": "FIRST", "position": 0, "ratings": {"naturalness": 9},
-                         "nr_shows": 1}, "missing"),  # fmt: skip
+        (
+            "/api/answer",
+            {"participant": "P", "stimulus": "FIRST", "position": 0, "ratings": {"naturalness": 9}, "nr_shows": 1},
+            "missing",
+        ),
     ],
 )
 def test_bad_requests_name_the_value(study: tuple, tmp_path: Path, path: str, body: dict, named: str) -> None:

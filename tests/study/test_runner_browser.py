@@ -64,7 +64,9 @@ class Server:
         deadline = time.monotonic() + 30.0
         while time.monotonic() < deadline:
             if self.process.poll() is not None:
-                raise AssertionError(f"server exited: {self.process.stderr.read().decode() if self.process.stderr else ''}")
+                raise AssertionError(
+                    f"server exited: {self.process.stderr.read().decode() if self.process.stderr else ''}"
+                )
             try:
                 if httpx.get(f"{self.url}/api/health", timeout=0.5).status_code == 200:
                     return

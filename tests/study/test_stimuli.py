@@ -54,7 +54,7 @@ def test_render_manifest_and_resume(tmp_path: Path) -> None:
     assert load_manifest(folder)["stimuli"] == manifest["stimuli"]
     # a re-run skips everything; a damaged video is rendered again
     (folder / "s002.mp4").write_bytes(b"garbage")
-    with pytest.raises(InvalidValueError, match="s002.mp4"):
+    with pytest.raises(InvalidValueError, match=r"s002\.mp4"):
         load_manifest(folder)
     again = make_stimuli(design, progress=False)
     assert (again.rendered, again.skipped) == (1, 3)

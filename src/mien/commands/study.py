@@ -38,7 +38,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
             "(default: STUDY_NAME.sqlite next to the design)",
         )
 
-    stimuli = with_design("stimuli", "render the design's stimulus videos (or check supplied ones) and write the manifest")
+    stimuli = with_design(
+        "stimuli", "render the design's stimulus videos (or check supplied ones) and write the manifest"
+    )
     stimuli.set_defaults(handler=run_stimuli)
 
     serve = with_design("serve", "run the web experiment (consent, instructions, stimuli, questions, completion)")

@@ -144,9 +144,7 @@ def participant_plan(design: Design, participant: str, ordinal: int) -> Plan:
     for spec in design.stimuli:
         combos.setdefault(tuple(spec.conditions.get(f) for f in between), None)
     between_levels = list(combos)[ordinal % len(combos)] if combos else ()
-    chosen = [
-        s for s in design.stimuli if tuple(s.conditions.get(f) for f in between) == tuple(between_levels)
-    ]
+    chosen = [s for s in design.stimuli if tuple(s.conditions.get(f) for f in between) == tuple(between_levels)]
     blocks: dict[tuple, list[str]] = {}
     for spec in chosen:
         blocks.setdefault(tuple(spec.conditions.get(f) for f in within), []).append(spec.id)

@@ -81,7 +81,7 @@ def create_app(design: "Design", manifest: dict[str, Any], stimuli_folder: str |
     files = {entry["file"] for entry in manifest["stimuli"]}
     asked = {q.key: q for q in questions(design.protocol)}
     study = design.name
-    plans: dict[str, "ParticipantRecord"] = {}
+    plans: dict[str, ParticipantRecord] = {}
 
     class SessionRequest(BaseModel):
         participant: str | None = Field(default=None, max_length=128)
@@ -227,7 +227,9 @@ def create_app(design: "Design", manifest: dict[str, Any], stimuli_folder: str |
         missing = [key for key in rec.label_order if key not in request.ratings]
         extra = [key for key in request.ratings if key not in asked]
         if missing or extra:
-            raise HTTPException(422, f"ratings must answer exactly {list(rec.label_order)}; missing {missing}, unknown {extra}")
+            raise HTTPException(
+                422, f"ratings must answer exactly {list(rec.label_order)}; missing {missing}, unknown {extra}"
+            )
         for key, value in request.ratings.items():
             q = asked[key]
             if not q.low <= value <= q.high:

@@ -175,10 +175,13 @@ class Store:
         self.retry_s = retry_s
         self._sa = sa
         self.is_sqlite = url.startswith("sqlite")
+        insert: Any
         if self.is_sqlite:
             from sqlalchemy.dialects.sqlite import insert
 
-            engine = sa.create_engine(url, connect_args={"timeout": busy_timeout_s, "check_same_thread": False}, pool_size=20)
+            engine = sa.create_engine(
+                url, connect_args={"timeout": busy_timeout_s, "check_same_thread": False}, pool_size=20
+            )
 
             @sa.event.listens_for(engine, "connect")
             def _pragmas(connection: Any, _record: Any) -> None:
@@ -261,7 +264,9 @@ class Store:
                 for row in rows:
                     statement = self._insert(table).values(**row)
                     update = {k: statement.excluded[k] for k in row if k not in ("study", "stimulus")}
-                    connection.execute(statement.on_conflict_do_update(index_elements=["study", "stimulus"], set_=update))
+                    connection.execute(
+                        statement.on_conflict_do_update(index_elements=["study", "stimulus"], set_=update)
+                    )
 
         self._retry(write)
 
