@@ -10,7 +10,7 @@ import pytest
 from mien.errors import InvalidValueError
 from mien.exchange import reader_for, writer_for
 from mien.exchange.key_reduction import default_tolerance, interpolate_keys, reduce_keys
-from mien.exchange.maya_anim import evaluate_curve, fps_to_time_unit, read, to_clip, write
+from mien.exchange.maya_anim import evaluate_curve, fps_to_time_unit, read, read_curves, to_clip, write
 from mien.facs.clip import Clip
 
 DATA = Path(__file__).parent / "data"
@@ -38,7 +38,7 @@ def test_registered_by_suffix(tmp_path: Path) -> None:
 
 
 def test_read_golden() -> None:
-    anim = read(DATA / "tiny_controllers.anim")
+    anim = read_curves(DATA / "tiny_controllers.anim")
     assert anim.fps == 24.0 and anim.header["timeUnit"] == "film" and anim.header["animVersion"] == "1.1"
     assert list(anim.curves) == ["smileFrown", "jaw"]
     jaw = anim.curves["jaw"]
@@ -51,14 +51,14 @@ def test_read_golden() -> None:
 def test_round_trip_within_tolerance_with_few_keys(tmp_path: Path) -> None:
     clip = smooth_clip()
     path = write(clip, tmp_path / "smooth.anim")
-    anim = read(path)
+    anim = read_curves(path)
     back = to_clip(anim)
     assert back.channels == clip.channels and back.fps == 60.0 and back.n_frames == 600
     for j, name in enumerate(clip.channels):
         limit = default_tolerance(clip.values[:, j])
         assert np.abs(back.values[:, j] - clip.values[:, j]).max() <= limit + 1e-12
         assert len(anim.curves[name].frames) < 60
-    full = read(write(clip, tmp_path / "full.anim", reduce=False))
+    full = read_curves(write(clip, tmp_path / "full.anim", reduce=False))
     assert len(full.curves["jaw"].frames) == 600
     np.testing.assert_array_equal(to_clip(full).values, clip.values)
 
@@ -82,7 +82,7 @@ def test_reduce_keys_bound_is_exact() -> None:
 
 def test_dict_input_and_time_units(tmp_path: Path) -> None:
     curves = {"eyeBlinkLeft": (np.array([0.0, 0.1, 0.2]), np.array([0.0, 1.0, 0.0]))}
-    anim = read(write(curves, tmp_path / "blink.anim", fps=120))
+    anim = read_curves(write(curves, tmp_path / "blink.anim", fps=120))
     assert anim.header["timeUnit"] == "120fps" and anim.fps == 120.0
     assert anim.curves["eyeBlinkLeft"].frames.tolist() == [0.0, 12.0, 24.0]
     assert [fps_to_time_unit(f) for f in (24, 25, 30, 48, 50, 60)] == ["film", "pal", "ntsc", "show", "palf", "ntscf"]
@@ -120,7 +120,7 @@ anim pCubeShape1 1 0 0;
 def test_read_maya_style_tangents(tmp_path: Path) -> None:
     path = tmp_path / "maya.anim"
     path.write_text(MAYA_STYLE)
-    anim = read(path)
+    anim = read_curves(path)
     curve = anim.curves["translateX"]
     assert curve.full_attribute == "translate.translateX" and curve.out_tangents == ("spline", "step", "linear")
     assert np.isnan(curve.in_angles[0]) and curve.in_angles[2] == 45.0
@@ -147,5 +147,51 @@ def test_malformed_files_name_the_line(tmp_path: Path, text: str, line: int) -> 
     path = tmp_path / "bad.anim"
     path.write_text(text)
     with pytest.raises(InvalidValueError) as info:
-        read(path)
+        read_curves(path)
     assert info.value.field == f"bad.anim line {line}"
+
+
+def test_rate_maya_does_not_name_is_resampled_and_said(tmp_path: Path) -> None:
+    clip = smooth_clip(seconds=1.0, fps=33.0)
+    with pytest.warns(UserWarning, match="resampled from 33 fps to 40 fps"):
+        path = write(clip, tmp_path / "odd.anim", reduce=False)
+    text = path.read_text()
+    assert text.startswith("// resampled from 33 fps to 40 fps (Maya has no 33 fps time unit)\n")
+    anim = read_curves(path)
+    assert anim.header["timeUnit"] == "40fps"
+    frames = anim.curves["jaw"].frames
+    assert np.array_equal(frames, np.round(frames)) and frames.tolist() == list(range(40))
+    back = read(path)
+    np.testing.assert_allclose(back.sample(clip.times_s), clip.values, atol=2e-3)
+    assert fps_to_time_unit(15) == "game" and fps_to_time_unit(29.97) == "29.97fps"
+    with pytest.raises(InvalidValueError, match="40 is the next"):
+        fps_to_time_unit(33)
+
+
+def test_nan_and_unordered_keys_refused_at_write(tmp_path: Path) -> None:
+    nan = {"jaw": (np.array([0.0, 1 / 30, 2 / 30]), np.array([0.0, np.nan, 1.0]))}
+    with pytest.raises(InvalidValueError, match=r"curves\['jaw'\] key 1"):
+        write(nan, tmp_path / "nan.anim", fps=30, reduce=False)
+    unordered = {"jaw": (np.array([0.0, 2 / 30, 1 / 30]), np.array([0.0, 1.0, 0.5]))}
+    with pytest.raises(InvalidValueError, match=r"key 2.*increasing"):
+        write(unordered, tmp_path / "order.anim", fps=30)
+    between = {"jaw": (np.array([0.0, 0.01]), np.array([0.0, 1.0]))}
+    with pytest.raises(InvalidValueError, match="on frames of 30 fps"):
+        write(between, tmp_path / "between.anim", fps=30)
+    assert not list(tmp_path.iterdir())  # nothing half-written
+
+
+def test_controller_script_creates_the_node_the_curves_target(tmp_path: Path) -> None:
+    from importlib.resources import files
+
+    from mien.exchange.maya_anim import controller_script
+
+    mel = controller_script(("smileFrown", "jaw"))
+    assert 'createNode transform -n "mien"' in mel and 'addAttr -ln "jaw" -at double -k 1 "mien"' in mel
+    general = (files("mien.exchange") / "data" / "mien_controller.mel").read_text()
+    assert "global proc string[] mienCreateController(string $animPath)" in general
+    # The general script keys on the anim lines mien writes: 7 tokens, attribute at 2 and node at 3.
+    line = next(x for x in (DATA / "tiny_controllers.anim").read_text().splitlines() if x.startswith("anim "))
+    tokens = line.replace(";", " ").split()
+    assert len(tokens) == 7 and tokens[2] == "smileFrown" and tokens[3] == "mien"
+    assert general.count("{") == general.count("}")

@@ -1,50 +1,174 @@
-"""File formats, one module per format, each registered in :data:`WRITERS` / :data:`READERS` by suffix.
+"""File formats: one module per format, one contract, a plain registry.
 
-A writer is ``write(clip_or_curves, path, **options)``; a reader is ``read(path) -> object``. Modules are
-imported lazily, so a format's optional dependency is needed only when that format is used.
+Every format module (named in :data:`FORMATS`) declares
+
+- ``SUFFIXES``: the file suffixes it answers to (``(".glb",)``);
+- ``read(source) -> Clip`` when it can be read, ``source`` a path or a binary stream;
+- ``write(clip, target, rig=None, **options)`` when it can be written, ``target`` a path (written atomically)
+  or a binary stream; formats that carry geometry (``.glb``) use ``rig``, the others refuse one;
+- optionally ``sniff(head: str) -> bool``, which tells its files from other formats sharing a suffix by their
+  first characters (three CSV dialects share ``.csv``).
+
+Raw readers keep their own names (:func:`mien.exchange.maya_anim.read_curves` returns the ``.anim`` curves and
+their keys). Format modules import only numpy at module level, so the registry is cheap; a format's optional
+dependency is needed only when that format is used.
+
+>>> sorted(readable_suffixes())
+['.anim', '.csv', '.glb', '.json', '.jsonl', '.npz']
+>>> writer_for("face.anim").__module__
+'mien.exchange.maya_anim'
 """
 
 from __future__ import annotations
 
 import importlib
+import os
 from collections.abc import Callable
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
-from mien.errors import UnknownNameError
+from mien.errors import InvalidValueError, UnknownNameError
 
-__all__ = ["READERS", "WRITERS", "reader_for", "writer_for"]
+__all__ = [
+    "FORMATS",
+    "READERS",
+    "WRITERS",
+    "format_for",
+    "format_module",
+    "read_clip",
+    "readable_suffixes",
+    "reader_for",
+    "writable_suffixes",
+    "writer_for",
+]
 
-WRITERS: dict[str, str] = {
-    ".csv": "mien.exchange.curves_csv:write",
-    ".json": "mien.exchange.clip_json:write",
-    ".npz": "mien.exchange.clip_npz:write",
-    ".anim": "mien.exchange.maya_anim:write",
+FORMATS: dict[str, str] = {
+    "curves_csv": "mien.exchange.curves_csv",
+    "arkit_csv": "mien.exchange.arkit_csv",
+    "openface_csv": "mien.exchange.openface_csv",
+    "clip_json": "mien.exchange.clip_json",
+    "openfacs_jsonl": "mien.exchange.openfacs_jsonl",
+    "clip_npz": "mien.exchange.clip_npz",
+    "maya_anim": "mien.exchange.maya_anim",
+    "glb": "mien.exchange.glb",
 }
-"""Suffix -> ``"module:function"`` of the writer."""
+"""Format name -> module. For a suffix shared by several formats the first listed is the default writer."""
 
-READERS: dict[str, str] = {
-    ".csv": "mien.exchange.curves_csv:read",
-    ".json": "mien.exchange.clip_json:read",
-    ".npz": "mien.exchange.clip_npz:read",
-    ".anim": "mien.exchange.maya_anim:read",
-}
-"""Suffix -> ``"module:function"`` of the reader."""
+_SNIFF_CHARACTERS = 4096
 
 
-def _resolve(table: dict[str, str], path: str | Path, kind: str) -> Callable[..., Any]:
+def format_module(name: str) -> ModuleType:
+    """The module of format ``name`` (a key of :data:`FORMATS`)."""
+    if name not in FORMATS:
+        raise UnknownNameError("file format", name, tuple(FORMATS))
+    return importlib.import_module(FORMATS[name])
+
+
+def _formats_with(suffix: str, function: str) -> list[str]:
+    found = []
+    for name in FORMATS:
+        module = format_module(name)
+        if suffix in module.SUFFIXES and hasattr(module, function):
+            found.append(name)
+    return found
+
+
+def readable_suffixes() -> set[str]:
+    """Suffixes some format reads."""
+    return {s for name in FORMATS if hasattr(format_module(name), "read") for s in format_module(name).SUFFIXES}
+
+
+def writable_suffixes() -> set[str]:
+    """Suffixes some format writes."""
+    return {s for name in FORMATS if hasattr(format_module(name), "write") for s in format_module(name).SUFFIXES}
+
+
+def _head(path: str | os.PathLike[str]) -> str:
+    try:
+        with open(path, encoding="utf-8-sig", errors="replace") as handle:
+            return handle.read(_SNIFF_CHARACTERS)
+    except OSError:
+        return ""
+
+
+def format_for(path: str | os.PathLike[str], mode: str = "read", format: str | None = None) -> str:
+    """The format name that reads (``mode="read"``) or writes (``"write"``) ``path``.
+
+    ``format`` (a :data:`FORMATS` name) forces one; otherwise the suffix decides, and among several readers of
+    one suffix the one whose ``sniff`` accepts the file's first characters.
+    """
+    function = "read" if mode == "read" else "write"
     suffix = Path(path).suffix.lower()
-    if suffix not in table:
-        raise UnknownNameError(f"{kind} file format", suffix or str(path), tuple(table))
-    module_name, function = table[suffix].split(":")
-    return getattr(importlib.import_module(module_name), function)
+    if format is not None:
+        module = format_module(format)
+        if not hasattr(module, function):
+            raise InvalidValueError("--format", format, f"a format that can {function} ({', '.join(_can(function))})")
+        return format
+    candidates = _formats_with(suffix, function)
+    if not candidates:
+        kind = "input" if mode == "read" else "output"
+        known = sorted(readable_suffixes() if mode == "read" else writable_suffixes())
+        raise UnknownNameError(f"{kind} file suffix", suffix or str(path), tuple(known))
+    if len(candidates) == 1 or mode != "read":
+        return candidates[0]
+    head = _head(path)
+    for name in candidates:
+        sniff = getattr(format_module(name), "sniff", None)
+        if sniff is not None and sniff(head):
+            return name
+    return candidates[0]
 
 
-def writer_for(path: str | Path) -> Callable[..., Any]:
-    """The writer function for ``path``'s suffix."""
-    return _resolve(WRITERS, path, "output")
+def _can(function: str) -> list[str]:
+    return [name for name in FORMATS if hasattr(format_module(name), function)]
 
 
-def reader_for(path: str | Path) -> Callable[..., Any]:
-    """The reader function for ``path``'s suffix."""
-    return _resolve(READERS, path, "input")
+def reader_for(path: str | os.PathLike[str], format: str | None = None) -> Callable[..., Any]:
+    """The ``read(source) -> Clip`` function for ``path`` (see :func:`format_for`).
+
+    When several formats read the suffix and ``path`` does not exist yet, the function returned sniffs the
+    source it is given (a path or a binary stream) when called.
+    """
+    suffix = Path(path).suffix.lower()
+    if format is None and not Path(path).is_file() and len(_formats_with(suffix, "read")) > 1:
+        return _sniffing_reader(suffix)
+    return getattr(format_module(format_for(path, "read", format)), "read")  # noqa: B009
+
+
+def _sniffing_reader(suffix: str) -> Callable[..., Any]:
+    def read(source: Any) -> Any:
+        import io
+
+        from mien.exchange.streams import read_bytes
+
+        if isinstance(source, (str, os.PathLike)):
+            return reader_for(source)(source)
+        data = read_bytes(source)
+        head = data[:_SNIFF_CHARACTERS].decode("utf-8-sig", errors="replace")
+        names = _formats_with(suffix, "read")
+        chosen = next((n for n in names if getattr(format_module(n), "sniff", lambda _: False)(head)), names[0])
+        stream = io.BytesIO(data)
+        stream.name = getattr(source, "name", "<stream>")
+        return format_module(chosen).read(stream)
+
+    return read
+
+
+def writer_for(path: str | os.PathLike[str], format: str | None = None) -> Callable[..., Any]:
+    """The ``write(clip, target, rig=None, ...)`` function for ``path`` (see :func:`format_for`)."""
+    return getattr(format_module(format_for(path, "write", format)), "write")  # noqa: B009
+
+
+def __getattr__(name: str) -> dict[str, tuple[str, ...]]:
+    """``READERS`` / ``WRITERS``: suffix -> names of the formats that read / write it (computed on use)."""
+    if name in ("READERS", "WRITERS"):
+        function = "read" if name == "READERS" else "write"
+        suffixes = readable_suffixes() if function == "read" else writable_suffixes()
+        return {suffix: tuple(_formats_with(suffix, function)) for suffix in sorted(suffixes)}
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def read_clip(path: str | os.PathLike[str], format: str | None = None) -> Any:
+    """Read the clip in ``path`` with the reader :func:`reader_for` picks."""
+    return reader_for(path, format)(path)

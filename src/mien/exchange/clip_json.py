@@ -1,21 +1,40 @@
-"""Clips as JSON: ``{"fps": ..., "channels": [...], "values": [[...], ...]}``."""
+"""Clips as JSON: ``{"fps": ..., "channels": [...], "values": [[...], ...]}`` (:meth:`Clip.to_json`)."""
 
 from __future__ import annotations
 
-from pathlib import Path
+import json
 
+from mien.errors import InvalidValueError
+from mien.exchange.streams import Source, Target, read_text, refuse_rig, source_name, write_text
 from mien.facs.clip import Clip
 
-__all__ = ["read", "write"]
+__all__ = ["SUFFIXES", "read", "write"]
+
+SUFFIXES: tuple[str, ...] = (".json",)
+"""File suffixes of this format."""
 
 
-def write(clip: Clip, path: str | Path) -> Path:
-    """Write ``clip`` as JSON (:meth:`Clip.to_json`)."""
-    path = Path(path)
-    path.write_text(clip.to_json(), encoding="utf-8")
-    return path
+def write(clip: Clip, target: Target, rig: object = None) -> Target:
+    """Write ``clip`` as JSON to ``target`` (a path, written atomically, or a binary stream)."""
+    refuse_rig(rig, ".json")
+    write_text(clip.to_json(), target)
+    return target
 
 
-def read(path: str | Path) -> Clip:
-    """Read a clip written by :func:`write`."""
-    return Clip.from_json(Path(path).read_text(encoding="utf-8"))
+def read(source: Source) -> Clip:
+    """Read a clip written by :func:`write`; bad JSON raises naming the file, line and column."""
+    name = source_name(source)
+    text = read_text(source)
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InvalidValueError(f"{name} line {exc.lineno} column {exc.colno}", exc.msg, "valid JSON") from None
+    if not isinstance(data, dict) or not {"fps", "channels", "values"} <= set(data):
+        keys = sorted(data) if isinstance(data, dict) else type(data).__name__
+        raise InvalidValueError(f"{name}", keys, 'an object with "fps", "channels" and "values"')
+    try:
+        return Clip.from_dict(data)
+    except (TypeError, ValueError) as exc:
+        if isinstance(exc, InvalidValueError):
+            raise InvalidValueError(f"{name} {exc.field}", exc.value, exc.expected) from None
+        raise InvalidValueError(f"{name}", str(exc), "numeric values, one row per frame") from None

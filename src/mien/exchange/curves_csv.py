@@ -1,48 +1,55 @@
-"""Plain CSV curves: a ``time_s`` column then one column per channel, one row per frame."""
+"""Plain CSV curves: a ``time_s`` column then one column per channel, one row per frame.
+
+The default ``.csv`` format (other CSV dialects, Live Link Face and OpenFace, are told apart by their
+headers). Values are written with full precision (Python's shortest round-trip ``repr``), so a round trip
+is exact.
+"""
 
 from __future__ import annotations
 
 import csv
-from pathlib import Path
+import io
 
 import numpy as np
 
-from mien.errors import InvalidValueError
+from mien.exchange.csv_table import check_increasing, read_columns
+from mien.exchange.streams import Source, Target, refuse_rig, write_text
 from mien.facs.clip import Clip
 
-__all__ = ["read", "write"]
+__all__ = ["SUFFIXES", "read", "sniff", "write"]
+
+SUFFIXES: tuple[str, ...] = (".csv",)
+"""File suffixes of this format."""
 
 
-def write(clip: Clip, path: str | Path) -> Path:
-    """Write ``clip`` as CSV (``time_s,<channel>,...``; values with full precision)."""
-    path = Path(path)
-    with path.open("w", newline="", encoding="utf-8") as handle:
-        writer = csv.writer(handle)
-        writer.writerow(("time_s", *clip.channels))
-        for time_s, row in zip(clip.times_s.tolist(), clip.values.tolist(), strict=True):
-            writer.writerow((repr(time_s), *(repr(v) for v in row)))
-    return path
+def sniff(head: str) -> bool:
+    """True when the first characters of a file start a ``time_s`` header."""
+    return head.lstrip().startswith("time_s")
 
 
-def read(path: str | Path) -> Clip:
+def write(clip: Clip, target: Target, rig: object = None) -> Target:
+    """Write ``clip`` as CSV (``time_s,<channel>,...``) to a path (atomically) or a binary stream."""
+    refuse_rig(rig, ".csv")
+    text = io.StringIO()
+    writer = csv.writer(text, lineterminator="\n")
+    writer.writerow(("time_s", *clip.channels))
+    for time_s, row in zip(clip.times_s.tolist(), clip.values.tolist(), strict=True):
+        writer.writerow((repr(time_s), *(repr(v) for v in row)))
+    write_text(text.getvalue(), target)
+    return target
+
+
+def read(source: Source) -> Clip:
     """Read a CSV written by :func:`write` (or any CSV with a ``time_s`` column and numeric columns).
 
-    The frame rate is taken from the mean time step; a file with one frame is read at 30 fps.
+    The frame rate is taken from the mean time step; a file with one frame is read at 30 fps. Bad cells,
+    short rows, NaN and time stamps that do not increase raise naming the file, line and column.
     """
-    path = Path(path)
-    with path.open(newline="", encoding="utf-8") as handle:
-        rows = list(csv.reader(handle))
-    if not rows or not rows[0] or rows[0][0] != "time_s":
-        raise InvalidValueError(f"{path} header", rows[0] if rows else None, "a first column named time_s")
-    header = rows[0]
-    try:
-        data = np.array([[float(v) for v in row] for row in rows[1:] if row], dtype=np.float64)
-    except ValueError as exc:
-        raise InvalidValueError(f"{path} values", str(exc), "numbers in every cell") from None
-    if data.size == 0:
-        return Clip(np.zeros((0, len(header) - 1)), 30.0, tuple(header[1:]))
-    if data.shape[1] != len(header):
-        raise InvalidValueError(f"{path} rows", data.shape[1], f"{len(header)} cells per row")
-    times = data[:, 0]
-    fps = 30.0 if len(times) < 2 else (len(times) - 1) / float(times[-1] - times[0])
-    return Clip(data[:, 1:], round(fps, 6), tuple(header[1:]))
+    table = read_columns(source, first_column="time_s")
+    check_increasing(table, "time_s")
+    times = table.values["time_s"]
+    count = len(times)
+    fps = 30.0 if count < 2 else (count - 1) / float(times[-1] - times[0])
+    channels = table.header[1:]
+    values = np.stack([table.values[c] for c in channels], axis=1) if channels else np.zeros((count, 0))
+    return Clip(values, round(fps, 6), tuple(channels))

@@ -24,17 +24,34 @@ from __future__ import annotations
 
 import math
 import re
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from mien.errors import InvalidValueError
 from mien.exchange.key_reduction import default_tolerance, reduce_keys
+from mien.exchange.streams import Source, Target, read_bytes, refuse_rig, source_name, write_text
 from mien.facs.clip import Clip
 
-__all__ = ["TIME_UNITS", "AnimCurve", "AnimFile", "evaluate_curve", "fps_to_time_unit", "read", "to_clip", "write"]
+__all__ = [
+    "MAYA_FPS_UNITS",
+    "SUFFIXES",
+    "TIME_UNITS",
+    "AnimCurve",
+    "AnimFile",
+    "controller_script",
+    "evaluate_curve",
+    "fps_to_time_unit",
+    "read",
+    "read_curves",
+    "to_clip",
+    "write",
+]
+
+SUFFIXES: tuple[str, ...] = (".anim",)
+"""File suffixes of this format."""
 
 TIME_UNITS: dict[str, float] = {
     "game": 15.0,
@@ -51,7 +68,14 @@ TIME_UNITS: dict[str, float] = {
 }
 """Maya time-unit names -> frames per second (Maya help, "ANIM file format"; ``<n>fps`` names are parsed)."""
 
-_WRITE_NAMES = {24.0: "film", 25.0: "pal", 30.0: "ntsc", 48.0: "show", 50.0: "palf", 60.0: "ntscf"}
+MAYA_FPS_UNITS: tuple[float, ...] = (
+    2, 3, 4, 5, 6, 8, 10, 12, 16, 20, 23.976, 29.97, 40, 47.952, 59.94, 75, 80, 100, 120, 125, 150, 200, 240,
+    250, 300, 375, 400, 500, 600, 750, 1200, 1500, 2000, 3000, 6000,
+)  # fmt: skip
+"""Rates Maya's ``<n>fps`` time units name (Maya 2018+ ``currentUnit -time``), besides the named units
+(:data:`TIME_UNITS`). A clip at any other rate is resampled to the next higher rate Maya names."""
+
+_WRITE_NAMES = {15.0: "game", 24.0: "film", 25.0: "pal", 30.0: "ntsc", 48.0: "show", 50.0: "palf", 60.0: "ntscf"}
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 _TANGENTS: tuple[str, ...] = ("global", "fixed", "linear", "flat", "step", "stepnext", "slow", "fast", "smooth")
 _TANGENTS += ("clamped", "plateau", "spline", "auto")
@@ -117,8 +141,10 @@ class AnimFile:
 
 
 def fps_to_time_unit(fps: float) -> str:
-    """Maya ``timeUnit`` name for a frame rate: ``film`` (24), ``pal`` (25), ``ntsc`` (30), ``show`` (48),
-    ``palf`` (50), ``ntscf`` (60), otherwise ``<fps>fps`` (``120fps``, ``29.97fps``).
+    """Maya ``timeUnit`` name for a frame rate Maya names: ``game`` (15), ``film`` (24), ``pal`` (25), ``ntsc``
+    (30), ``show`` (48), ``palf`` (50), ``ntscf`` (60), or ``<fps>fps`` for :data:`MAYA_FPS_UNITS`.
+
+    Other rates raise; :func:`maya_rate` gives the rate a clip is resampled to.
 
     >>> fps_to_time_unit(24), fps_to_time_unit(120), fps_to_time_unit(29.97)
     ('film', '120fps', '29.97fps')
@@ -126,7 +152,24 @@ def fps_to_time_unit(fps: float) -> str:
     rate = float(fps)
     if not math.isfinite(rate) or rate <= 0:
         raise InvalidValueError("fps", fps, "a positive finite number")
-    return _WRITE_NAMES.get(rate, f"{rate:g}fps")
+    if rate in _WRITE_NAMES:
+        return _WRITE_NAMES[rate]
+    if rate in MAYA_FPS_UNITS:
+        return f"{rate:g}fps"
+    raise InvalidValueError("fps", fps, f"a rate Maya names ({maya_rate(rate):g} is the next one)")
+
+
+def maya_rate(fps: float) -> float:
+    """``fps`` when Maya has a time unit for it, else the smallest higher rate that Maya names.
+
+    >>> maya_rate(30.0), maya_rate(33.0), maya_rate(7000.0)
+    (30.0, 40.0, 6000.0)
+    """
+    rate = float(fps)
+    named = sorted({*_WRITE_NAMES, *MAYA_FPS_UNITS})
+    if rate in named:
+        return rate
+    return float(next((r for r in named if r > rate), named[-1]))
 
 
 def _number(value: float) -> str:
@@ -143,15 +186,26 @@ def _frame_text(frame: float) -> str:
     return str(int(nearest)) if abs(frame - nearest) < 1e-9 else _number(frame)
 
 
-def _curves(curves: CurvesInput, fps: float | None) -> tuple[dict[str, tuple[np.ndarray, np.ndarray]], float]:
+def _curves(curves: CurvesInput, fps: float | None) -> tuple[dict[str, tuple[np.ndarray, np.ndarray]], float, str]:
+    """(name -> (times_s, values), file rate, note): a clip is resampled to a rate Maya names when needed."""
     if isinstance(curves, Clip):
-        rate = curves.fps if fps is None else float(fps)
-        times = curves.times_s
-        return {name: (times, curves.values[:, j]) for j, name in enumerate(curves.channels)}, rate
+        wanted = curves.fps if fps is None else float(fps)
+        rate = maya_rate(wanted)
+        note = ""
+        clip = curves
+        if rate != curves.fps and curves.n_frames:
+            n_frames = math.ceil((curves.n_frames - 1) / curves.fps * rate - 1e-9) + 1  # covers the last frame
+            times = np.arange(n_frames) / rate
+            clip = Clip(curves.sample(times), rate, curves.channels)
+            why = f"Maya has no {wanted:g} fps time unit" if rate != wanted else "as asked"
+            note = f"// resampled from {curves.fps:g} fps to {rate:g} fps ({why})\n"
+        times = clip.times_s
+        return {name: (times, clip.values[:, j]) for j, name in enumerate(clip.channels)}, rate, note
     if not isinstance(curves, Mapping):
         raise InvalidValueError("curves", type(curves).__name__, "a Clip or a dict name -> (times_s, values)")
     if fps is None:
         raise InvalidValueError("fps", None, "a frame rate when curves is a dict")
+    fps_to_time_unit(fps)  # a dict's key times stay as given: its rate must be one Maya names
     out = {}
     for name, pair in curves.items():
         try:
@@ -159,12 +213,33 @@ def _curves(curves: CurvesInput, fps: float | None) -> tuple[dict[str, tuple[np.
         except (TypeError, ValueError):
             raise InvalidValueError(f"curves[{name!r}]", type(pair).__name__, "a (times_s, values) pair") from None
         out[str(name)] = (np.asarray(times, dtype=np.float64), np.asarray(values, dtype=np.float64))
-    return out, float(fps)
+    return out, float(fps), ""
+
+
+def _check_keys(name: str, times: np.ndarray, values: np.ndarray, frames: np.ndarray, rate: float) -> np.ndarray:
+    """Integer frames of one curve's keys; NaN, unordered keys and keys between frames raise naming the key."""
+    if times.ndim != 1 or times.shape != values.shape or times.size == 0:
+        raise InvalidValueError(f"curves[{name!r}]", f"shapes {times.shape}, {values.shape}", "(n,) and (n,), n >= 1")
+    bad = np.flatnonzero(~(np.isfinite(times) & np.isfinite(values)))
+    if bad.size:
+        i = int(bad[0])
+        raise InvalidValueError(f"curves[{name!r}] key {i}", (float(times[i]), float(values[i])), "finite numbers")
+    order = np.flatnonzero(np.diff(times) <= 0)
+    if order.size:
+        i = int(order[0]) + 1
+        raise InvalidValueError(f"curves[{name!r}] key {i}", float(times[i]), "key times increasing, in order")
+    whole = np.round(frames)
+    off = np.flatnonzero(np.abs(frames - whole) > 1e-6)
+    if off.size:
+        i = int(off[0])
+        raise InvalidValueError(f"curves[{name!r}] key {i}", float(times[i]), f"times on frames of {rate:g} fps")
+    return whole
 
 
 def write(
     curves: CurvesInput,
-    path: str | Path,
+    target: Target,
+    rig: object = None,
     *,
     fps: float | None = None,
     node: str = "mien",
@@ -172,16 +247,21 @@ def write(
     reduce: bool = True,
     maya_version: str = "2020",
     start_frame: int = 0,
-) -> Path:
-    """Write curves as a Maya ``.anim`` file and return its path.
+) -> Target:
+    """Write curves as a Maya ``.anim`` file to ``target`` (a path, written atomically, or a binary stream).
 
     ``curves``: a Clip (one curve per channel, time ``i / fps``) or a dict ``name -> (times_s, values)``.
-    ``fps``: frame rate of the file (default: the clip's). Time ``t`` seconds is frame ``start_frame + t * fps``.
-    ``node``: the Maya node the attributes belong to. ``reduce``: keep only the keys needed so that linear
-    interpolation reproduces every sample within ``tolerance`` (absolute; None: 0.5 % of each curve's value
-    range); otherwise every sample is a key. Channel names must be Maya attribute names (letters, digits, ``_``).
+    ``fps``: frame rate of the file (default: the clip's). A clip whose rate Maya does not name (33 fps) is
+    resampled (linearly) to the next rate Maya names (40 fps; :func:`maya_rate`), and the file says so in a
+    comment; a dict's rate must be one Maya names. Time ``t`` seconds is frame ``start_frame + t * fps``; every
+    key lies exactly on a frame (a dict key between frames raises). NaN values and keys out of time order raise
+    naming the curve and key. ``node``: the Maya node the attributes belong to (``controller_script`` makes it).
+    ``reduce``: keep only the keys needed so that linear interpolation reproduces every sample within
+    ``tolerance`` (absolute; None: 0.5 % of each curve's value range); otherwise every sample is a key. Channel
+    names must be Maya attribute names (letters, digits, ``_``).
     """
-    table, rate = _curves(curves, fps)
+    refuse_rig(rig, ".anim")
+    table, rate, note = _curves(curves, fps)
     time_unit = fps_to_time_unit(rate)
     if not _NAME.match(node):
         raise InvalidValueError("node", node, "a Maya node name (letters, digits, _)")
@@ -194,13 +274,12 @@ def write(
     for index, (name, (times, values)) in enumerate(table.items()):
         if not _NAME.match(name):
             raise InvalidValueError("channel", name, "a Maya attribute name (letters, digits, _)")
-        if times.ndim != 1 or times.shape != values.shape or times.size == 0:
-            raise InvalidValueError(f"curves[{name!r}]", f"shapes {times.shape}, {values.shape}", "(n,) and (n,)")
+        frames_all = _check_keys(name, times, values, start_frame + times * rate, rate)
         keep = np.arange(times.size)
         if reduce:
             limit = default_tolerance(values) if tolerance is None else tolerance
             keep = reduce_keys(times, values, limit)
-        frames = start_frame + times[keep] * rate
+        frames = frames_all[keep]
         first_frame = min(first_frame, float(frames[0]))
         last_frame = max(last_frame, float(frames[-1]))
         keys = "\n".join(
@@ -219,8 +298,10 @@ def write(
             "  }\n"
             "}\n"
         )
+    if note:
+        warnings.warn(f"{source_name(target)}: {note[3:].strip()}", stacklevel=2)
     header = (
-        "animVersion 1.1;\n"
+        note + "animVersion 1.1;\n"
         f"mayaVersion {maya_version};\n"
         f"timeUnit {time_unit};\n"
         "linearUnit cm;\n"
@@ -228,9 +309,26 @@ def write(
         f"startTime {_frame_text(first_frame)};\n"
         f"endTime {_frame_text(last_frame)};\n"
     )
-    target = Path(path)
-    target.write_text(header + "".join(blocks), encoding="utf-8")
+    write_text(header + "".join(blocks), target)
     return target
+
+
+def controller_script(channels: tuple[str, ...] | list[str], node: str = "mien") -> str:
+    """MEL that creates ``node`` (a transform) with a keyable double attribute per channel, for a ``.anim`` file.
+
+    Run it in Maya's script editor, select ``node`` and import the ``.anim`` (File > Import, animImportExport
+    plug-in): the curves then apply as they are. The general form, which reads the channel names out of any
+    ``.anim`` file, is ``mien/exchange/data/mien_controller.mel`` (``mienCreateController "path.anim";``).
+    """
+    for name in (node, *channels):
+        if not _NAME.match(name):
+            raise InvalidValueError("channel", name, "a Maya name (letters, digits, _)")
+    lines = [f'if (!`objExists "{node}"`) createNode transform -n "{node}";']
+    for name in channels:
+        lines.append(
+            f'if (!`attributeQuery -node "{node}" -exists "{name}"`) addAttr -ln "{name}" -at double -k 1 "{node}";'
+        )
+    return "\n".join(lines) + "\n"
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -308,19 +406,24 @@ def _parse_key(tokens: list[str], where: str, line: str) -> tuple[float, float, 
     return frame, value, in_type, out_type, in_angle, out_angle
 
 
-def read(path: str | Path) -> AnimFile:
-    """Parse a ``.anim`` file; malformed content raises :class:`InvalidValueError` naming the line."""
-    source = Path(path)
-    text = source.read_text(encoding="utf-8", errors="replace")
+def read(source: Source) -> Clip:
+    """The curves of a ``.anim`` file sampled at its own frame rate (:func:`read_curves` then :func:`to_clip`)."""
+    return to_clip(read_curves(source))
+
+
+def read_curves(source: Source) -> AnimFile:
+    """Parse a ``.anim`` file into its curves and keys; malformed content raises naming the file and line."""
+    name = source_name(source)
+    text = read_bytes(source).decode("utf-8", errors="replace")
     header: dict[str, str] = {}
     curves: list[AnimCurve] = []
     current: _Builder | None = None
     state = "top"  # top -> anim (after an anim line) -> data (in animData) -> keys (in keys)
-    where = f"{source.name} line 0"
+    where = f"{name} line 0"
     line = ""
     for number, raw in enumerate(text.splitlines(), 1):
         line = raw.strip()
-        where = f"{source.name} line {number}"
+        where = f"{name} line {number}"
         content = re.split(r"//|#", line, maxsplit=1)[0].strip()
         if not content:
             continue
@@ -366,11 +469,11 @@ def read(path: str | Path) -> AnimFile:
     if state != "top":
         raise InvalidValueError(where, line, "the file to close every animData and keys block")
     if "animVersion" not in header:
-        raise InvalidValueError(f"{source.name} line 1", "no animVersion", "an 'animVersion 1.1;' header line")
-    fps = _time_unit_fps(header.get("timeUnit", "film"), f"{source.name} timeUnit", header.get("timeUnit", ""))
+        raise InvalidValueError(f"{name} line 1", "no animVersion", "an 'animVersion 1.1;' header line")
+    fps = _time_unit_fps(header.get("timeUnit", "film"), f"{name} timeUnit", header.get("timeUnit", ""))
     for name in ("startTime", "endTime"):
         if name in header:
-            _float(header[name], f"{source.name} {name}", header[name])
+            _float(header[name], f"{name} {name}", header[name])
     named: dict[str, AnimCurve] = {}
     leaves = [c.attribute for c in curves]
     for curve in curves:

@@ -21,7 +21,16 @@ from typing import IO, Union
 
 from mien.errors import InvalidValueError, MissingAssetError
 
-__all__ = ["Source", "Target", "read_bytes", "read_text", "source_name", "write_bytes", "write_text"]
+__all__ = [
+    "Source",
+    "Target",
+    "read_bytes",
+    "read_text",
+    "refuse_rig",
+    "source_name",
+    "write_bytes",
+    "write_text",
+]
 
 Source = Union[str, "os.PathLike[str]", IO[bytes]]
 """A path or a readable binary stream."""
@@ -83,3 +92,9 @@ def write_bytes(data: bytes, target: Target) -> Path | None:
 def write_text(text: str, target: Target) -> Path | None:
     """Write ``text`` as UTF-8 to ``target`` (see :func:`write_bytes`)."""
     return write_bytes(text.encode("utf-8"), target)
+
+
+def refuse_rig(rig: object, suffix: str) -> None:
+    """Raise when a ``rig`` is given to a format that carries no geometry (``suffix`` names the format)."""
+    if rig is not None:
+        raise InvalidValueError("head", getattr(rig, "name", rig), f"no head for {suffix} (only .glb carries a mesh)")

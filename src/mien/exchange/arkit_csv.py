@@ -1,0 +1,198 @@
+"""Live Link Face (Epic Games' iPhone app) CSV: ARKit blendshape weights per frame, read and written.
+
+Layout, as the app records it: a header ``Timecode,BlendShapeCount,EyeBlinkLeft,EyeLookDownLeft,...,TongueOut,
+HeadYaw,HeadPitch,HeadRoll,LeftEyeYaw,LeftEyePitch,LeftEyeRoll,RightEyeYaw,RightEyePitch,RightEyeRoll`` (the
+52 ARKit names with a capital first letter, in ARKit order, then 9 rotations), then one row per frame:
+``HH:MM:SS:FF.mmm`` (hours, minutes, seconds, frame number at the timecode rate and the sub-frame fraction),
+the number of values that follow (61), the 52 weights 0..1 and the rotations in radians.
+
+Reading: columns are found by name (any order); the 52 blendshape columns are required; the head and eye
+columns are optional. Rotations become mien pose channels in degrees: ``HeadYaw/HeadPitch/HeadRoll`` ->
+``head_yaw_deg/head_pitch_deg/head_roll_deg``, the mean of the two eyes' yaw and pitch -> ``gaze_yaw_deg``
+/ ``gaze_pitch_deg``, with the app's signs (not checked against a recorded head turn). Columns that are not
+known names are skipped with a warning that lists them. The timecode rate is the smallest of 24, 25, 30, 48,
+50, 60 above every frame number in the file (60, the app's default, when the file is shorter than a second);
+the clip's frame rate is estimated from the time stamps, and the rows are resampled onto that uniform grid.
+The result is a weight clip (ARKit names, 0..1); :func:`mien.exchange.face_weights.weights_to_au` turns it into
+AU intensities (``mien import --au``).
+
+Writing: an ARKit weight clip (or a face-channel clip, through the AU mapping on the built-in ARKit
+vocabulary) as the app writes it, starting at timecode ``00:00:00:00.000``, with the timecode rate equal to
+the clip's when it is one of 24, 25, 30, 48, 50, 60 (else 60).
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+
+from mien.errors import InvalidValueError
+from mien.exchange.csv_table import check_increasing, columns_from_text
+from mien.exchange.streams import Source, Target, read_text, refuse_rig, source_name, write_text
+from mien.facs.catalogue import POSE_CHANNELS
+from mien.facs.clip import Clip
+from mien.rig.arkit import ARKIT_NAMES
+
+__all__ = ["COLUMNS", "ROTATION_COLUMNS", "SUFFIXES", "format_timecode", "parse_timecode", "read", "sniff", "write"]
+
+SUFFIXES: tuple[str, ...] = (".csv",)
+"""File suffixes of this format (told from other CSV files by :func:`sniff`)."""
+
+ROTATION_COLUMNS: tuple[str, ...] = (
+    "HeadYaw",
+    "HeadPitch",
+    "HeadRoll",
+    "LeftEyeYaw",
+    "LeftEyePitch",
+    "LeftEyeRoll",
+    "RightEyeYaw",
+    "RightEyePitch",
+    "RightEyeRoll",
+)
+"""Rotation columns after the blendshapes, radians."""
+
+COLUMNS: tuple[str, ...] = tuple(n[0].upper() + n[1:] for n in ARKIT_NAMES) + ROTATION_COLUMNS
+"""The 61 value columns, in the app's order."""
+
+TIMECODE_RATES: tuple[int, ...] = (24, 25, 30, 48, 50, 60)
+"""Timecode frame rates the reader chooses from."""
+
+
+def sniff(head: str) -> bool:
+    """True when the file starts with a Live Link Face header."""
+    return head.lstrip().replace(" ", "").startswith("Timecode,BlendShapeCount")
+
+
+def parse_timecode(text: str, rate: float) -> float:
+    """Seconds of an ``HH:MM:SS:FF.mmm`` timecode at ``rate`` frames per second; ``ValueError`` if malformed.
+
+    >>> parse_timecode("00:00:01:15.500", 30)
+    1.5166666666666666
+    """
+    parts = text.strip().split(":")
+    if len(parts) != 4:
+        raise ValueError(text)
+    hours, minutes, seconds = (int(p) for p in parts[:3])
+    frame = float(parts[3])
+    if minutes >= 60 or seconds >= 60 or frame < 0 or hours < 0:
+        raise ValueError(text)
+    return hours * 3600.0 + minutes * 60.0 + seconds + frame / rate
+
+
+def format_timecode(seconds: float, rate: int) -> str:
+    """``HH:MM:SS:FF.mmm`` of ``seconds`` at timecode ``rate`` (the inverse of :func:`parse_timecode`).
+
+    >>> format_timecode(1.5166666666666666, 30)
+    '00:00:01:15.500'
+    """
+    frames = seconds * rate
+    whole = math.floor(frames + 1e-6)
+    fraction = max(0.0, frames - whole)
+    total_s, frame = divmod(whole, rate)
+    hours, rest = divmod(int(total_s), 3600)
+    minutes, secs = divmod(rest, 60)
+    return f"{hours:02d}:{minutes:02d}:{secs:02d}:{int(frame):02d}.{round(fraction * 1000):03d}"
+
+
+def _timecode_parts(text: str) -> float:
+    """``HH:MM:SS:FF.mmm`` -> whole seconds * 1000 + FF.mmm (both parts in one float; the rate comes later)."""
+    parts = text.strip().split(":")
+    if len(parts) != 4:
+        raise ValueError(text)
+    hours, minutes, seconds = (int(p) for p in parts[:3])
+    frame = float(parts[3])
+    if not (0 <= minutes < 60 and 0 <= seconds < 60 and hours >= 0 and 0 <= frame < 1000):
+        raise ValueError(text)
+    return (hours * 3600 + minutes * 60 + seconds) * 1000.0 + frame
+
+
+def read(source: Source, timecode_fps: int | None = None) -> Clip:
+    """Read a Live Link Face CSV as an ARKit weight clip (see the module doc); ``timecode_fps`` overrides the
+    timecode rate the reader infers."""
+    name = source_name(source)
+    text = read_text(source)
+    first = text.lstrip().split("\n", 1)[0]
+    if not sniff(first):
+        raise InvalidValueError(f"{name} line 1", first[:40], "a Live Link Face header 'Timecode,BlendShapeCount,...'")
+    header = [c.strip() for c in first.split(",")]
+    known = set(COLUMNS) | {"Timecode", "BlendShapeCount"}
+    unknown = [c for c in header if c not in known]
+    if unknown:
+        warnings.warn(f"{name}: skipped unknown columns {', '.join(unknown)}", stacklevel=2)
+    missing = [c for c in COLUMNS[:52] if c not in header]
+    if missing:
+        column_list = ", ".join(missing[:6]) + (", ..." if len(missing) > 6 else "")
+        raise InvalidValueError(f"{name} line 1", f"no column {column_list}", "all 52 ARKit blendshape columns")
+    rotations = [c for c in ROTATION_COLUMNS if c in header]
+    wanted = ["Timecode", *COLUMNS[:52], *rotations]
+    table = columns_from_text(text, name, wanted, {"Timecode": _timecode_parts})
+    if len(table.lines) == 0:
+        raise InvalidValueError(f"{name}", "no data rows", "at least one frame after the header")
+    whole_s = np.floor(table.values["Timecode"] / 1000.0)
+    frame_numbers = table.values["Timecode"] - whole_s * 1000.0
+    rate = timecode_fps
+    if rate is None:
+        rate = 60
+        if len(np.unique(whole_s)) > 2:  # a whole second seen: its frame numbers show the rate
+            rate = next((r for r in TIMECODE_RATES if r > frame_numbers.max()), 60)
+    times = whole_s + frame_numbers / rate
+    table.values["Timecode"] = times
+    check_increasing(table, "Timecode")
+    for column in COLUMNS[:52]:
+        weights = table.values[column]
+        bad = np.flatnonzero((weights < -1e-6) | (weights > 1.0 + 1e-6))
+        if bad.size:
+            raise InvalidValueError(table.where(int(bad[0]), column), float(weights[bad[0]]), "a weight in 0..1")
+    fps = 30.0 if len(times) < 2 else round((len(times) - 1) / float(times[-1] - times[0]), 3)
+    grid = times[0] + np.arange(len(times)) / fps
+    columns = [np.interp(grid, times, table.values[c]) for c in COLUMNS[:52]]
+    channels = list(ARKIT_NAMES)
+    if {"HeadYaw", "HeadPitch", "HeadRoll"} <= set(rotations):
+        columns += [np.degrees(np.interp(grid, times, table.values[c])) for c in ("HeadYaw", "HeadPitch", "HeadRoll")]
+        channels += list(POSE_CHANNELS[:3])
+    eyes = ("LeftEyeYaw", "RightEyeYaw", "LeftEyePitch", "RightEyePitch")
+    if set(eyes) <= set(rotations):
+        for left, right in (eyes[:2], eyes[2:]):
+            mean = 0.5 * (table.values[left] + table.values[right])
+            columns.append(np.degrees(np.interp(grid, times, mean)))
+        channels += list(POSE_CHANNELS[3:])
+    return Clip(np.stack(columns, axis=1), fps, tuple(channels))
+
+
+def write(clip: Clip, target: Target, rig: object = None) -> Target:
+    """Write ``clip`` as a Live Link Face CSV (see the module doc) to a path (atomically) or a binary stream.
+
+    ``clip``: ARKit names (weights 0..1) and optional pose channels (degrees), or face channels, which go
+    through the AU -> ARKit mapping. Missing ARKit channels are written as 0.
+    """
+    from mien.exchange.face_weights import clip_to_rig, is_weight_clip
+
+    refuse_rig(rig, "Live Link Face .csv")
+    if is_weight_clip(clip, ARKIT_NAMES):
+        weights = np.zeros((clip.n_frames, 52))
+        poses = np.zeros((clip.n_frames, len(POSE_CHANNELS)))
+        for j, channel in enumerate(clip.channels):
+            if channel in POSE_CHANNELS:
+                poses[:, POSE_CHANNELS.index(channel)] = clip.values[:, j]
+            else:
+                weights[:, ARKIT_NAMES.index(channel)] = clip.values[:, j]
+    else:
+        from mien.rig.builtin_head import builtin_head
+
+        all_weights, poses = clip_to_rig(clip, builtin_head())
+        weights = np.asarray(all_weights[:, :52], np.float64)
+    rate = int(clip.fps) if clip.fps in TIMECODE_RATES else 60
+    radians = np.radians(poses)
+    zero = np.zeros(clip.n_frames)
+    # head yaw, pitch, roll; then each eye's yaw, pitch, roll (both eyes follow the one gaze)
+    rotations = np.column_stack(
+        [*radians[:, :3].T, radians[:, 3], radians[:, 4], zero, radians[:, 3], radians[:, 4], zero]
+    )
+    rows = ["Timecode,BlendShapeCount," + ",".join(COLUMNS)]
+    for i, time_s in enumerate(clip.times_s):
+        values = ",".join(repr(float(v)) for v in np.concatenate([weights[i], rotations[i]]))
+        rows.append(f"{format_timecode(float(time_s), rate)},{len(COLUMNS)},{values}")
+    write_text("\n".join(rows) + "\n", target)
+    return target
