@@ -29,7 +29,7 @@ def _script(batch: CharacterBatch, row: int, character: Character) -> list:
                 lambda: batch.set_aus(row, {"AU4": 2.0, "R14B": 1.0}),
                 lambda: character.set_aus({"AU4": 2.0, "R14B": 1.0}, replace=True),
             ),
-        ),  # noqa: E501
+        ),
         (0, both(lambda: batch.set_mood(row, {"sadness": 0.4}), lambda: character.set_mood({"sadness": 0.4}))),
         (
             10,
@@ -37,9 +37,9 @@ def _script(batch: CharacterBatch, row: int, character: Character) -> list:
                 lambda: batch.play_au(row, "AU1D", onset_s=0.2, apex_s=0.3, offset_s=0.4),
                 lambda: character.play_au("AU1D", onset_s=0.2, apex_s=0.3, offset_s=0.4),
             ),
-        ),  # noqa: E501
+        ),
         (20, both(lambda: batch.emote(row, "joy", 1.2), lambda: character.emote("joy", 1.2))),
-        (30, both(lambda: batch.set_au(row, "AU51", 2.0, tau_s=0.3), lambda: character.set_au("AU51", 2.0, tau_s=0.3))),  # noqa: E501
+        (30, both(lambda: batch.set_au(row, "AU51", 2.0, tau_s=0.3), lambda: character.set_au("AU51", 2.0, tau_s=0.3))),
         (40, both(lambda: batch.emote(row, "evil", 0.8, t_s=0.9), lambda: character.emote("evil", 0.8, start_s=0.9))),
         (60, both(lambda: batch.set_speed(row, 0.2, au="AU12"), lambda: character.set_speed(0.2, au="AU12"))),
         (
@@ -48,7 +48,7 @@ def _script(batch: CharacterBatch, row: int, character: Character) -> list:
                 lambda: batch.laugh(row, "laughter", 0.8, seed=4, duration_s=1.5),
                 lambda: character.laugh("laughter", 0.8, duration_s=1.5, seed=4),
             ),
-        ),  # noqa: E501
+        ),
         (90, both(lambda: batch.set_aus(row, {"AU26": 1.0}), lambda: character.set_aus({"AU26": 1.0}, replace=True))),
         (150, both(lambda: batch.emote(row, "surprise", 2.4), lambda: character.emote("surprise", 2.4))),
     ]
@@ -127,7 +127,7 @@ def test_add_and_remove_rows():
     frames = batch.step(0.6)
     assert not frames[1].any() and frames[0, AU["AU12L"]] == 4.0
     for bad in (1, [0, 1], 7, -1, "0", 1.5):
-        with pytest.raises(InvalidValueError, match="rows|row"):
+        with pytest.raises(InvalidValueError, match="row"):
             batch.set_au(bad, "AU12", 1.0)
     with pytest.raises(InvalidValueError):
         batch.snapshot(1)
