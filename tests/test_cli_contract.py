@@ -65,6 +65,7 @@ CASES: list[Case] = [
     case("emote", "plot under a file", f"emote joy --plot {UNDER_FILE}.png", "--plot", "some_file.txt"),
     case("emote", "huge request", "emote joy --duration 1e7 --fps 1000", "--duration 1e+07", "2 GiB"),
     case("emote", "unknown emotion", "emote glee", "unknown emotion 'glee'"),
+    case("emote", "intensity out of range", "emote joy --intensity 7", "intensity=7.0"),
     # au
     case("au", "zero fps", "au AU12 --fps 0", "'0'"),
     case("au", "negative duration", "au AU12 --duration -1", "'-1'"),
@@ -171,9 +172,12 @@ CASES: list[Case] = [
     case("serve", "zero tick rate", "serve --tick-hz 0 --check", "--tick-hz", "0"),
     case("serve", "negative tick rate", "serve --tick-hz -5 --check", "-5"),
     case("serve", "bad port", "serve --udp-port -1 --check", "--udp-port", "-1"),
+    case("serve", "port out of range", "serve --http-port 70000 --check", "--http-port", "70000"),
     # send
     case("send", "NaN intensity", "send --au AU12=nan", "AU12=nan"),
     case("send", "unreachable server", "send --au AU12=3 --ws --port 1", "127.0.0.1:1"),
+    case("send", "NaN PAD", "send --pad nan 0 0", "nan"),
+    case("send", "negative speed", "send --speed -1 --au AU12=1", "Speed=-1.0"),
     # study
     case("study", "missing design", "study stimuli {d}/desing.toml", "desing.toml"),
     case("study", "not a design", "study stimuli {d}/smile.csv", "smile.csv"),

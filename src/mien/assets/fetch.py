@@ -68,7 +68,7 @@ def _chunks(response: Any) -> Iterator[bytes]:
         yield block
 
 
-def _download(url: str, target: Path, show_progress: bool, timeout_s: float) -> str:
+def _download(url: str, target: Path, show_progress: bool, timeout_s: float, label: str) -> str:
     """Stream ``url`` into ``target``; returns the SHA-256 hex digest of what was written."""
     import urllib.error
     import urllib.request
@@ -84,7 +84,7 @@ def _download(url: str, target: Path, show_progress: bool, timeout_s: float) -> 
             length = int(response.headers.get("Content-Length") or 0) if hasattr(response, "headers") else 0
             total = math.ceil(length / CHUNK_BYTES) if length else None
             size = f" ({length / 1024**2:.0f} MiB)" if length else ""
-            for block in progress(_chunks(response), total=total, desc=f"downloading {target.parent.name}{size}",
+            for block in progress(_chunks(response), total=total, desc=f"downloading {label}{size}",
                                   enabled=show_progress):  # fmt: skip
                 digest.update(block)
                 handle.write(block)
@@ -160,7 +160,7 @@ def fetch_asset(
     try:
         with tempfile.TemporaryDirectory(dir=target.parent, prefix=f".{target.name}.partial-") as work:
             archive = Path(work) / f"{name}.zip"
-            digest = _download(url, archive, show_progress, timeout_s)
+            digest = _download(url, archive, show_progress, timeout_s, name)
             if not expected:
                 raise InvalidValueError(
                     "sha256", None, f"the archive's SHA-256, but none is recorded for {url}; the download measured "
