@@ -114,6 +114,7 @@ def test_session_resume_and_idempotence(study: tuple, tmp_path: Path) -> None:
 def test_bad_requests_name_the_value(study: tuple, tmp_path: Path, path: str, body: dict, named: str) -> None:
     client, _ = client_for(study, tmp_path / "db.sqlite")
     s = client.post("/api/session", json={"participant": "P"}).json()
+    client.post("/api/consent", json={"participant": "P"})
     if body.get("stimulus") == "FIRST":
         body = {**body, "stimulus": s["sequence"][0]["stimulus"]}
     reply = client.post(path, json=body)
@@ -125,6 +126,10 @@ def test_out_of_range_rating(study: tuple, tmp_path: Path) -> None:
     client, store = client_for(study, tmp_path / "db.sqlite")
     s = client.post("/api/session", json={"participant": "P"}).json()
     item = s["sequence"][0]
+    body = {"participant": "P", "stimulus": item["stimulus"], "position": 0, "ratings": answers_for(s), "nr_shows": 1}
+    reply = client.post("/api/answer", json=body)
+    assert reply.status_code == 409 and "consent" in reply.json()["detail"]
+    client.post("/api/consent", json={"participant": "P"})
     ratings = {**answers_for(s), "naturalness": 6}
     body = {"participant": "P", "stimulus": item["stimulus"], "position": 0, "ratings": ratings, "nr_shows": 1}
     reply = client.post("/api/answer", json=body)
@@ -136,6 +141,7 @@ def test_locked_database_gives_503(study: tuple, tmp_path: Path) -> None:
     db = tmp_path / "db.sqlite"
     client, store = client_for(study, db, retry_s=0.01, busy_timeout_s=0.05)
     s = client.post("/api/session", json={"participant": "P"}).json()
+    client.post("/api/consent", json={"participant": "P"})
     item = s["sequence"][0]
     body = {"participant": "P", "stimulus": item["stimulus"], "position": 0, "ratings": answers_for(s), "nr_shows": 1}
     blocker = sqlite3.connect(db, timeout=0.1)
@@ -159,6 +165,7 @@ def test_export_and_analyze_commands(study: tuple, tmp_path: Path, capsys: pytes
     client, store = client_for(study, db)
     for k in range(3):
         s = client.post("/api/session", json={"participant": f"P{k}"}).json()
+        client.post("/api/consent", json={"participant": f"P{k}"})
         for item in s["sequence"]:
             ratings = {q["key"]: 1 + (i + k + item["position"]) % 5 for i, q in enumerate(s["questions"])}
             body = {"participant": f"P{k}", "stimulus": item["stimulus"], "position": item["position"],

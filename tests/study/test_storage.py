@@ -90,6 +90,8 @@ def test_concurrent_writers(store: Store) -> None:
     with ThreadPoolExecutor(max_workers=6) as pool:
         stored = list(pool.map(session, participants))
     assert stored == [6] * len(participants)
+    ordinals = sorted(store.participant("st", p).ordinal for p in participants)  # type: ignore[union-attr]
+    assert ordinals == list(range(len(participants)))  # unique arrival order even when arriving together
     assert store.count_answers("st") == 6 * len(participants)
 
 

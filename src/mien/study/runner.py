@@ -218,6 +218,8 @@ def create_app(design: "Design", manifest: dict[str, Any], stimuli_folder: str |
     @app.post("/api/answer")
     def answer(request: AnswerRequest) -> dict[str, Any]:
         rec = record(request.participant)
+        if rec.consent_at is None:
+            raise HTTPException(409, f"participant {rec.participant!r} has not given consent: POST /api/consent first")
         if request.position >= len(rec.sequence) or rec.sequence[request.position] != request.stimulus:
             raise HTTPException(
                 422,

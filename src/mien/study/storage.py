@@ -132,6 +132,7 @@ def _schema() -> tuple[sa.MetaData, dict[str, sa.Table]]:
             sa.Column("block_order", text, nullable=False),
             sa.Column("consent_at", text),
             sa.Column("completed_at", text),
+            sa.UniqueConstraint("study", "ordinal", name="mien_study_participant_ordinal"),
         ),
         "shows": sa.Table(
             "mien_study_shows",
@@ -274,37 +275,39 @@ class Store:
         self, study: str, participant: str, plan: Callable[[int], tuple[Any, Any, Any]]
     ) -> ParticipantRecord:
         """The stored participant, created on first arrival with ``plan(ordinal) -> (sequence, label_order,
-        block_order)`` (ordinal = number of participants already in the study). Idempotent."""
+        block_order)``; ordinal = 0, 1, 2... in order of arrival, unique per study even when participants
+        arrive at the same moment (a clash on the unique (study, ordinal) is retried with the next one).
+        Idempotent."""
         sa = self._sa
         table = self.tables["participants"]
-        existing = self.participant(study, participant)
-        if existing is not None:
-            return existing
+        for _ in range(100):
+            existing = self.participant(study, participant)
+            if existing is not None:
+                return existing
 
-        def create() -> None:
-            with self.engine.begin() as connection:
-                count = connection.execute(
-                    sa.select(sa.func.count()).select_from(table).where(table.c.study == study)
-                ).scalar_one()
-                sequence, label_order, block_order = plan(int(count))
-                connection.execute(
-                    self._insert(table)
-                    .values(
-                        study=study,
-                        participant=participant,
-                        ordinal=int(count),
-                        started_at=now_iso(),
-                        sequence=json.dumps(list(sequence)),
-                        label_order=json.dumps(list(label_order)),
-                        block_order=json.dumps([int(b) for b in block_order]),
+            def create() -> None:
+                with self.engine.begin() as connection:
+                    last = connection.execute(
+                        sa.select(sa.func.max(table.c.ordinal)).where(table.c.study == study)
+                    ).scalar_one()
+                    ordinal = 0 if last is None else int(last) + 1
+                    sequence, label_order, block_order = plan(ordinal)
+                    connection.execute(
+                        self._insert(table)
+                        .values(
+                            study=study,
+                            participant=participant,
+                            ordinal=ordinal,
+                            started_at=now_iso(),
+                            sequence=json.dumps(list(sequence)),
+                            label_order=json.dumps(list(label_order)),
+                            block_order=json.dumps([int(b) for b in block_order]),
+                        )
+                        .on_conflict_do_nothing()  # this participant, or this ordinal, taken meanwhile
                     )
-                    .on_conflict_do_nothing()
-                )
 
-        self._retry(create)
-        record = self.participant(study, participant)
-        assert record is not None
-        return record
+            self._retry(create)
+        raise StorageUnavailableError(f"participant {participant!r} could not be stored (100 clashing arrivals)")
 
     def _set_time(self, study: str, participant: str, column: str) -> None:
         sa = self._sa

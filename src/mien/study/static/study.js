@@ -125,6 +125,10 @@ function showTrial() {
   video.src = item.url;
   video.dataset.stimulus = item.stimulus;
   video.onloadeddata = () => { video.onloadeddata = null; play(); };
+  video.onerror = () => {
+    $("trial-error").textContent = "This video could not be loaded. Please reload the page; your answers so far are saved.";
+    $("trial-error").hidden = false;
+  };
   video.load();
   window.scrollTo(0, 0);
   updateNext();
