@@ -1,0 +1,81 @@
+"""``mien export INPUT OUTPUT``: any clip file mien reads -> any format it writes (.glb with the head)."""
+
+from __future__ import annotations
+
+import argparse
+from typing import TYPE_CHECKING
+
+from mien.commands._checks import input_file, output_file, positive_fps
+
+if TYPE_CHECKING:
+    from mien.facs.clip import Clip
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "export",
+        help="convert a clip file to another format (.glb, .anim, Live Link CSV, .jsonl...)",
+        description="Read INPUT (any format mien reads: .csv curves, Live Link Face or OpenFace CSV, .json, "
+        ".jsonl, .npz, .anim, .glb) and write OUTPUT in the format its suffix names: .glb (the head with the "
+        "clip as animations of its morph weights and head rotation), .anim (Maya curves), .csv (time_s curves; "
+        "--format arkit_csv for Live Link Face), .json, .jsonl (OpenFACS), .npz. Formats are in docs/FORMATS.md.",
+    )
+    parser.add_argument("input", type=input_file, help="clip file to read")
+    parser.add_argument("output", type=output_file, help="file to write; its suffix picks the format")
+    parser.add_argument("--head", help="head for .glb: default, builtin or ict (only .glb carries a head)")
+    parser.add_argument("--identity", help="head identity for .glb (see mien render --help)")
+    parser.add_argument("--fps", type=positive_fps, help="resample the clip to this frame rate before writing")
+    parser.add_argument("--format", help="output format when several share a suffix (arkit_csv for .csv)")
+    parser.add_argument("--input-format", help="input format when its suffix and header do not tell")
+    parser.set_defaults(handler=run)
+
+
+def resample(clip: Clip, fps: float) -> Clip:
+    """``clip`` linearly resampled to ``fps`` over the same time span (first to last frame)."""
+    import math
+
+    import numpy as np
+
+    from mien.facs.clip import Clip
+
+    if clip.n_frames < 2 or fps == clip.fps:
+        return clip
+    n_frames = math.floor((clip.n_frames - 1) / clip.fps * fps + 1e-9) + 1
+    return Clip(clip.sample(np.arange(n_frames) / fps), fps, clip.channels)
+
+
+def run(args: argparse.Namespace) -> int:
+    import warnings
+
+    from mien.commands._checks import refuse_option
+    from mien.exchange import format_for, format_module, reader_for
+
+    output_format = format_for(args.output, "write", args.format)
+    carries_head = output_format == "glb"
+    if not carries_head:
+        for option, value in (("--head", args.head), ("--identity", args.identity)):
+            if value is not None:
+                refuse_option(option, value, f"{args.output.suffix} carries no head (only .glb does)")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        clip = reader_for(args.input, args.input_format)(args.input)
+        if clip.n_frames == 0:
+            from mien.errors import InvalidValueError
+
+            raise InvalidValueError(str(args.input), "no frames", "a clip with at least one frame")
+        if args.fps is not None:
+            clip = resample(clip, args.fps)
+        write = format_module(output_format).write
+        if carries_head:
+            from mien.rig.heads import load_head
+
+            rig = load_head(args.head or "default", args.identity)
+            write(clip, args.output, rig=rig)
+            done = f"on the {rig.name} head"
+        else:
+            write(clip, args.output)
+            done = f"({output_format})"
+    for warning in caught:
+        print(f"mien export: warning: {warning.message}")
+    print(f"exported {clip.n_frames} frames at {clip.fps:g} fps {done}: {args.output}")
+    return 0
