@@ -182,3 +182,59 @@ def test_export_and_analyze_commands(study: tuple, tmp_path: Path, capsys: pytes
     assert (report / "report.html").is_file()
     assert main(["study", "analyze", str(design.path), "--db", str(tmp_path / "empty.sqlite")]) == 2
     assert "at least one stored answer" in capsys.readouterr().err
+
+
+def test_serve_refuses_clearly(study: tuple, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    import socket
+
+    from mien.cli import main
+
+    design, _, folder = study
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        closed_port = probe.getsockname()[1]
+    args = ["study", "serve", str(design.path), "--stimuli", str(folder), "--port", "0"]
+    assert main([*args, "--db", f"postgresql://postgres@127.0.0.1:{closed_port}/x"]) == 2
+    assert "locked or unreachable" in capsys.readouterr().err
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        assert main([*args[:-1], str(port)]) == 2
+        assert f"--port={port} is invalid" in capsys.readouterr().err
+    assert main([*args[:3], "--stimuli", str(tmp_path)]) == 2
+    assert "run `mien study stimuli" in capsys.readouterr().err
+
+
+MASCARO = """
+[study]
+name = "laughs"
+protocol = "mascaro"
+[stimuli]
+laughter_types = ["sly_smile", "false_laughter"]
+duration_s = 0.5
+fps = 6
+size = 32
+[stimuli.descriptions]
+sly_smile = "A sly, knowing smile"
+"""
+
+
+def test_mascaro_protocol(tmp_path: Path) -> None:
+    path = tmp_path / "laughs.toml"
+    path.write_text(MASCARO)
+    design = load_design(path)
+    result = make_stimuli(design, progress=False)
+    client, store = client_for((design, result.manifest, result.manifest_path.parent), tmp_path / "db.sqlite")
+    s = client.post("/api/session", json={"participant": "M1"}).json()
+    client.post("/api/consent", json={"participant": "M1"})
+    assert [q["key"] for q in s["questions"]] == ["feels_right", "represents_description"]
+    assert {(q["low"], q["high"]) for q in s["questions"]} == {(0, 5)}
+    assert {i["description"] for i in s["sequence"]} == {"A sly, knowing smile", "False laughter"}
+    for item in s["sequence"]:
+        body = {"participant": "M1", "stimulus": item["stimulus"], "position": item["position"],
+                "ratings": {"feels_right": 0, "represents_description": 5}, "nr_shows": 1}  # fmt: skip
+        assert client.post("/api/answer", json=body).json()["stored"] == 2
+    frame = store.answers_frame("laughs")
+    assert list(frame.columns[7:9]) == ["laughter_type", "description"]
+    assert frame["label_position"].isna().all() and set(frame["rating"]) == {0, 5}

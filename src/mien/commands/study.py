@@ -108,9 +108,27 @@ def _checked_manifest(design: Design, folder: Path) -> dict:
     return manifest
 
 
+def _check_port(host: str, port: int) -> None:
+    import socket
+
+    from mien.errors import InvalidValueError
+
+    if not 0 <= port <= 65535:
+        raise InvalidValueError("--port", port, "a TCP port 0..65535")
+    try:
+        with socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET, socket.SOCK_STREAM) as probe:
+            probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            probe.bind((host, port))
+    except OSError as error:
+        raise InvalidValueError(
+            "--port", port, f"a free port on {host} ({error.strerror}); stop the other server or pick another port"
+        ) from None
+
+
 def run_serve(args: argparse.Namespace) -> int:
     from mien.study.runner import create_app, serve
 
+    _check_port(args.host, args.port)
     design = _design(args)
     folder = _stimuli_folder(args, design)
     manifest = _checked_manifest(design, folder)
