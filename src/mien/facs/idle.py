@@ -69,11 +69,15 @@ _WALK_STEP = np.array([w.step for w in _WALKS])
 _WALK_MOVE = np.array([w.move_probability for w in _WALKS])
 _BLINK_STREAM, _GAZE_STREAM, _GAZE_TIME_STREAM, _WOBBLE_STREAM = 100, 200, 201, 300
 
-_AU12 = (channel_index("AU12L"), channel_index("AU12R"))
-_AU15 = (channel_index("AU15L"), channel_index("AU15R"))
-_AU5 = (channel_index("AU5L"), channel_index("AU5R"))
-_AU43 = (channel_index("AU43L"), channel_index("AU43R"))
-_AU45 = (channel_index("AU45L"), channel_index("AU45R"))
+
+def _pair(au: str) -> slice:
+    """The face-frame columns of ``au``'s left and right channels (adjacent, so a view, not a copy)."""
+    left, right = channel_index(f"{au}L"), channel_index(f"{au}R")
+    assert right == left + 1, au
+    return slice(left, right + 1)
+
+
+_AU12, _AU15, _AU5, _AU43, _AU45 = (_pair(au) for au in ("AU12", "AU15", "AU5", "AU43", "AU45"))
 _YAW, _ROLL = channel_index("head_yaw_deg"), channel_index("head_roll_deg")
 _GAZE_YAW = channel_index("gaze_yaw_deg")
 
@@ -217,7 +221,8 @@ class IdleBatch:
         self._gaze_from = np.zeros(0)
         self._gaze_to = np.zeros(0)
         self._phase = np.zeros((0, 2))
-        self._walking = False
+        self._amp: dict[str, np.ndarray] = {}
+        self._walking = self._blinking = self._gazing = self._wobbling = False
         self.add_rows(seeds, settings if settings is not None else IdleSettings())
 
     @property
@@ -276,7 +281,26 @@ class IdleBatch:
         self._gaze_from[rows] = 0.0
         self._gaze_to[rows] = yaw
         self._phase[rows] = _wobble_phase(seed[:, None])
-        self._walking = bool(np.any(self._on["mouth"] + self._on["eyelids"] + self._on["neck"]))
+        self._update_amplitudes()
+
+    def _update_amplitudes(self) -> None:
+        """Per-row gains with the on/off switches folded in (0 for a part that is off)."""
+        on, num = self._on, self._num
+        num["wobble_frequency_hz"] = 1.0 / num["wobble_period_s"]
+        self._amp = {
+            "mouth": on["mouth"] * num["mouth_au_at_1"],
+            "eyelids": on["eyelids"] * num["eyelid_au_at_1"],
+            "neck_yaw": on["neck"] * num["neck_yaw_deg_at_1"],
+            "neck_roll": on["neck"] * num["neck_roll_deg_at_1"],
+            "blink": 5.0 * on["blink"],
+            "gaze": on["gaze"],
+            "wobble_yaw": on["wobble"] * num["wobble_yaw_deg"],
+            "wobble_roll": on["wobble"] * num["wobble_roll_deg"],
+        }
+        self._walking = bool(np.any(on["mouth"] + on["eyelids"] + on["neck"]))
+        self._blinking = bool(on["blink"].any())
+        self._gazing = bool(on["gaze"].any())
+        self._wobbling = bool(on["wobble"].any())
 
     def walk_positions(self, t_s: float) -> np.ndarray:
         """(n, 5) positions of the walks (mouth L, mouth R, eyelids, neck twist, neck side) at ``t_s``.
@@ -340,30 +364,28 @@ class IdleBatch:
         ``mouth_scale`` ((n,) or scalar, 0..1) lets idle mouth motion yield to a laughing or speaking mouth;
         blinks combine by max with the expression's AU45, so a blink during a smile still closes the eyes.
         """
-        on, num = self._on, self._num
+        amp = self._amp
         if self._walking:
             m = self.walk_positions(t_s)
-            mouth = m[:, 0:2] * (on["mouth"] * num["mouth_au_at_1"] * mouth_scale)[:, None]
+            mouth = m[:, 0:2] * (amp["mouth"] * mouth_scale)[:, None]
             frames[:, _AU12] += np.maximum(mouth, 0.0)
-            frames[:, _AU15] += np.maximum(-mouth, 0.0)
-            lids = (m[:, 2] * (on["eyelids"] * num["eyelid_au_at_1"]))[:, None]
+            mouth *= -1.0
+            frames[:, _AU15] += np.maximum(mouth, 0.0)
+            lids = (m[:, 2] * amp["eyelids"])[:, None]
             frames[:, _AU5] += np.maximum(lids, 0.0)
-            frames[:, _AU43] += np.maximum(-lids, 0.0)
-            frames[:, _YAW] += m[:, 3] * (on["neck"] * num["neck_yaw_deg_at_1"])
-            frames[:, _ROLL] += m[:, 4] * (on["neck"] * num["neck_roll_deg_at_1"])
-        if on["blink"].any():
-            level = (5.0 * on["blink"]) * self.blink(t_s)
-            frames[:, _AU45] = np.maximum(frames[:, _AU45], level[:, None])
-        if on["gaze"].any():
-            frames[:, _GAZE_YAW] += on["gaze"] * self.gaze_yaw(t_s)
-        if on["wobble"].any():
-            with np.errstate(divide="ignore", invalid="ignore"):
-                angle = (2.0 * math.pi * t_s) / num["wobble_period_s"]
-            wobble = on["wobble"]
-            frames[:, _YAW] += np.where(wobble > 0, num["wobble_yaw_deg"] * np.sin(angle + self._phase[:, 0]), 0.0)
-            frames[:, _ROLL] += np.where(
-                wobble > 0, num["wobble_roll_deg"] * np.sin(angle / 1.37 + self._phase[:, 1]), 0.0
-            )
+            lids *= -1.0
+            frames[:, _AU43] += np.maximum(lids, 0.0)
+            frames[:, _YAW] += m[:, 3] * amp["neck_yaw"]
+            frames[:, _ROLL] += m[:, 4] * amp["neck_roll"]
+        if self._blinking:
+            level = amp["blink"] * self.blink(t_s)
+            np.maximum(frames[:, _AU45], level[:, None], out=frames[:, _AU45])
+        if self._gazing:
+            frames[:, _GAZE_YAW] += amp["gaze"] * self.gaze_yaw(t_s)
+        if self._wobbling:
+            angle = (2.0 * math.pi * t_s) * self._num["wobble_frequency_hz"]
+            frames[:, _YAW] += amp["wobble_yaw"] * np.sin(angle + self._phase[:, 0])
+            frames[:, _ROLL] += amp["wobble_roll"] * np.sin(angle / 1.37 + self._phase[:, 1])
 
 
 class Idle:
