@@ -112,12 +112,18 @@ def format_for(path: str | os.PathLike[str], mode: str = "read", format: str | N
         raise UnknownNameError(f"{kind} file suffix", suffix or str(path), tuple(known))
     if len(candidates) == 1 or mode != "read":
         return candidates[0]
-    head = _head(path)
-    for name in candidates:
-        sniff = getattr(format_module(name), "sniff", None)
+    return _sniff(_head(path), candidates, Path(path).name)
+
+
+def _sniff(head: str, candidates: list[str], name: str) -> str:
+    """The candidate whose ``sniff`` accepts ``head``; none raises naming what each format starts with."""
+    for candidate in candidates:
+        sniff = getattr(format_module(candidate), "sniff", None)
         if sniff is not None and sniff(head):
-            return name
-    return candidates[0]
+            return candidate
+    hints = "; ".join(f"{c}: {getattr(format_module(c), 'HEADER_HINT', '?')}" for c in candidates)
+    first = head.lstrip().split("\n", 1)[0][:60]
+    raise InvalidValueError(f"{name} line 1", first, f"the header of a format mien reads ({hints})")
 
 
 def _can(function: str) -> list[str]:
@@ -140,16 +146,15 @@ def _sniffing_reader(suffix: str) -> Callable[..., Any]:
     def read(source: Any) -> Any:
         import io
 
-        from mien.exchange.streams import read_bytes
+        from mien.exchange.streams import read_bytes, source_name
 
         if isinstance(source, (str, os.PathLike)):
             return reader_for(source)(source)
         data = read_bytes(source)
         head = data[:_SNIFF_CHARACTERS].decode("utf-8-sig", errors="replace")
-        names = _formats_with(suffix, "read")
-        chosen = next((n for n in names if getattr(format_module(n), "sniff", lambda _: False)(head)), names[0])
         stream = io.BytesIO(data)
         stream.name = getattr(source, "name", "<stream>")
+        chosen = _sniff(head, _formats_with(suffix, "read"), source_name(stream))
         return format_module(chosen).read(stream)
 
     return read

@@ -11,14 +11,15 @@ columns are optional. Rotations become mien pose channels in degrees: ``HeadYaw/
 ``head_yaw_deg/head_pitch_deg/head_roll_deg``, the mean of the two eyes' yaw and pitch -> ``gaze_yaw_deg``
 / ``gaze_pitch_deg``, with the app's signs (not checked against a recorded head turn). Columns that are not
 known names are skipped with a warning that lists them. The timecode rate is the smallest of 24, 25, 30, 48,
-50, 60 above every frame number in the file (60, the app's default, when the file is shorter than a second);
+50, 60 above the last frame number before a change of the seconds field (60, the app's default, when the
+seconds never change);
 the clip's frame rate is estimated from the time stamps, and the rows are resampled onto that uniform grid.
 The result is a weight clip (ARKit names, 0..1); :func:`mien.exchange.face_weights.weights_to_au` turns it into
 AU intensities (``mien import --au``).
 
 Writing: an ARKit weight clip (or a face-channel clip, through the AU mapping on the built-in ARKit
-vocabulary) as the app writes it, starting at timecode ``00:00:00:00.000``, with the timecode rate equal to
-the clip's when it is one of 24, 25, 30, 48, 50, 60 (else 60).
+vocabulary) as the app writes it, starting at timecode ``00:00:00:00.000``, with a 60 fps timecode and the
+sub-frame in milliseconds of a frame (so any clip rate is kept).
 """
 
 from __future__ import annotations
@@ -40,6 +41,9 @@ __all__ = ["COLUMNS", "ROTATION_COLUMNS", "SUFFIXES", "format_timecode", "parse_
 SUFFIXES: tuple[str, ...] = (".csv",)
 """File suffixes of this format (told from other CSV files by :func:`sniff`)."""
 
+HEADER_HINT = "Timecode,BlendShapeCount,EyeBlinkLeft,... (Live Link Face)"
+"""What the first line of such a file looks like (for messages)."""
+
 ROTATION_COLUMNS: tuple[str, ...] = (
     "HeadYaw",
     "HeadPitch",
@@ -58,6 +62,9 @@ COLUMNS: tuple[str, ...] = tuple(n[0].upper() + n[1:] for n in ARKIT_NAMES) + RO
 
 TIMECODE_RATES: tuple[int, ...] = (24, 25, 30, 48, 50, 60)
 """Timecode frame rates the reader chooses from."""
+
+WRITE_TIMECODE_FPS = 60
+"""Timecode rate of written files (the app's default), whatever the clip's frame rate."""
 
 
 def sniff(head: str) -> bool:
@@ -135,8 +142,10 @@ def read(source: Source, timecode_fps: int | None = None) -> Clip:
     rate = timecode_fps
     if rate is None:
         rate = 60
-        if len(np.unique(whole_s)) > 2:  # a whole second seen: its frame numbers show the rate
-            rate = next((r for r in TIMECODE_RATES if r > frame_numbers.max()), 60)
+        change = np.flatnonzero(np.diff(whole_s) > 0)
+        if change.size:  # the last frame number before the seconds change shows the rate
+            last = float(frame_numbers[change].max())
+            rate = next((r for r in TIMECODE_RATES if r > last), 60)
     times = whole_s + frame_numbers / rate
     table.values["Timecode"] = times
     check_increasing(table, "Timecode")
@@ -183,7 +192,7 @@ def write(clip: Clip, target: Target, rig: object = None) -> Target:
 
         all_weights, poses = clip_to_rig(clip, builtin_head())
         weights = np.asarray(all_weights[:, :52], np.float64)
-    rate = int(clip.fps) if clip.fps in TIMECODE_RATES else 60
+    rate = WRITE_TIMECODE_FPS
     radians = np.radians(poses)
     zero = np.zeros(clip.n_frames)
     # head yaw, pitch, roll; then each eye's yaw, pitch, roll (both eyes follow the one gaze)

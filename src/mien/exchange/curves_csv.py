@@ -21,6 +21,9 @@ __all__ = ["SUFFIXES", "read", "sniff", "write"]
 SUFFIXES: tuple[str, ...] = (".csv",)
 """File suffixes of this format."""
 
+HEADER_HINT = "time_s,<channel>,... (time in seconds, one column per channel)"
+"""What the first line of such a file looks like (for messages)."""
+
 
 def sniff(head: str) -> bool:
     """True when the first characters of a file start a ``time_s`` header."""

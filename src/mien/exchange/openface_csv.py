@@ -37,6 +37,9 @@ __all__ = ["PRESENCE_INTENSITY", "SUFFIXES", "read", "sniff"]
 SUFFIXES: tuple[str, ...] = (".csv",)
 """File suffixes of this format (told from other CSV files by :func:`sniff`)."""
 
+HEADER_HINT = "frame, face_id, timestamp, ..., AU01_r, ... (OpenFace 2.x)"
+"""What the first line of such a file looks like (for messages)."""
+
 PRESENCE_INTENSITY = 1.0
 """Intensity given to an AU OpenFace reports only as present (``AUxx_c`` = 1, no ``AUxx_r``)."""
 
