@@ -151,6 +151,7 @@ def test_openfacs_reads_sides_and_skips_unknown_keys(tmp_path: Path) -> None:
 
 LIVE_HEADER = "Timecode,BlendShapeCount," + ",".join(arkit_csv.COLUMNS)
 LIVE_ROW = "00:00:00:{:02d}.000,61," + ",".join(["0.1"] * 61)
+LL = LIVE_HEADER + "\n"
 BAD_INPUT = [
     # (file name, text, error pattern: file, line, column)
     ("trunc.csv", "time_s,AU12L,AU6L\n0,1,2\n0.1,1", r"trunc\.csv line 3.*truncated"),
