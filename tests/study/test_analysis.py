@@ -11,7 +11,7 @@ import pytest
 from scipy import stats
 
 from mien.errors import InvalidValueError, UnknownNameError
-from mien.study.analysis import ANSWER_COLUMNS, analyze, analyze_csv, mean_ci, rm_anova, trials_frame
+from mien.study.analysis import ANSWER_COLUMNS, analyze, analyze_csv, mean_ci, trials_frame
 from mien.study.quality import paper_table4
 
 DATA = Path(__file__).parent / "data"
@@ -99,23 +99,45 @@ def test_rm_anova_pingouin_agrees_with_statsmodels(factors: list[str]) -> None:
         assert view["p"] < 0.01
 
 
-def test_rm_anova_three_factors_and_greenhouse_geisser() -> None:
-    result = analyze_csv(DATA / "broekens_anova.csv")
-    assert result.factors == ("basis", "view", "intensity")
-    table = result.anova["target_intensity"]
-    assert table.engine == "statsmodels.AnovaRM"
-    assert list(table.table["effect"]) == [
-        "basis", "view", "intensity", "basis x view", "basis x intensity", "view x intensity",
-        "basis x view x intensity",
-    ]  # fmt: skip
-    reference = _statsmodels_anova(result.trials, "target_intensity", ["basis", "view", "intensity"])
-    np.testing.assert_allclose(table.table["F"], reference["F Value"], rtol=1e-9)
+@pytest.mark.parametrize("factors", [["basis", "view", "intensity"], ["expression", "basis", "view", "intensity"]])
+def test_rm_anova_three_or_more_factors_agrees_with_statsmodels(factors: list[str]) -> None:
+    result = analyze_csv(DATA / "broekens_anova.csv", design_factors=factors)
+    for measure in ("target_intensity", "naturalness", "label:anger"):
+        table = result.anova[measure]
+        assert table.engine == "mien.study.anova.balanced_rm_anova" and table.n_participants == 8
+        reference = _statsmodels_anova(result.trials, measure, factors)
+        reference.index = [" x ".join(str(i).split(":")) for i in reference.index]
+        assert sorted(table.table["effect"]) == sorted(reference.index) and len(reference) == 2 ** len(factors) - 1
+        ours = table.table.set_index("effect").loc[reference.index]
+        np.testing.assert_allclose(ours["F"], reference["F Value"], rtol=1e-6, atol=1e-9)
+        np.testing.assert_allclose(ours["df1"], reference["Num DF"], atol=1e-9)
+        np.testing.assert_allclose(ours["df2"], reference["Den DF"], atol=1e-9)
+        np.testing.assert_allclose(ours["p"], reference["Pr > F"], rtol=1e-6, atol=1e-9)
+
+
+def test_balanced_rm_anova_agrees_with_pingouin_epsilon_and_eta() -> None:
+    """Three-level factors (sphericity matters): eps, GG p and ng2 as pingouin computes them."""
+    from mien.study.anova import _pingouin, balanced_rm_anova
+
+    rng = np.random.default_rng(3)
+    values = rng.normal(size=(9, 3, 4)) + np.array([0.0, 0.4, 1.0])[None, :, None]
+    values[:, :, 2] += rng.normal(scale=2.0, size=(9, 3))  # unequal variances: eps < 1
+    rows = [(f"s{s}", f"a{a}", f"b{b}", values[s, a, b]) for s in range(9) for a in range(3) for b in range(4)]
+    frame = pd.DataFrame(rows, columns=["participant", "A", "B", "y"])
+    ours = balanced_rm_anova(values, ["A", "B"]).set_index("effect")
+    theirs = _pingouin(frame, "participant", ["A", "B"], "y").set_index("effect")
+    for effect in ("A", "B", "A x B"):
+        for column in ("F", "df1", "df2", "p", "p_gg", "eps", "ng2"):
+            assert ours.loc[effect, column] == pytest.approx(theirs.loc[effect, column], rel=1e-6, abs=1e-9), (
+                effect,
+                column,
+            )
+    assert ours.loc["B", "eps"] < 0.9
+    one = balanced_rm_anova(values.mean(axis=2), ["A"]).iloc[0]
+    ref = _pingouin(frame.groupby(["participant", "A"])["y"].mean().reset_index(), "participant", ["A"], "y").iloc[0]
+    assert one["eps"] == pytest.approx(ref["eps"]) and one["p_gg"] == pytest.approx(ref["p_gg"])
     # a 3-level factor: the GG-corrected p uses eps x df, as SPSS (the paper's Table 3) does
-    trials = result.trials.assign(level=lambda t: t["position"] % 3)
-    three = rm_anova(trials, "naturalness", ["level"])
-    row = three.table.iloc[0]
-    assert row["df1"] == 2 and 0.5 <= row["eps"] <= 1
-    assert row["p_gg"] == pytest.approx(stats.f.sf(row["F"], 2 * row["eps"], row["df2"] * row["eps"]))
+    assert one["p_gg"] == pytest.approx(stats.f.sf(one["F"], 2 * one["eps"], one["df2"] * one["eps"]))
 
 
 def test_unbalanced_cells_drop_participants_and_say_so() -> None:

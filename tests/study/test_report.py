@@ -78,7 +78,7 @@ def test_report_names_dropped_participants(tmp_path: Path) -> None:
     gone = (answers["participant"] == "P05") & (answers["view"] == "lateral")
     page = write_report(analyze(answers[~gone]), tmp_path / "r.html").read_text(encoding="utf-8")
     assert "dropped from an ANOVA (a cell without answers): <b>1</b> (P05)" in page
-    assert "statsmodels.AnovaRM" in page and "without an answer in every cell dropped: P05" in page
+    assert "balanced_rm_anova" in page and "without an answer in every cell dropped: P05" in page
 
 
 def test_mascaro_report(tmp_path: Path) -> None:

@@ -16,12 +16,8 @@ Broekens protocol (ten emotion labels and naturalness, 1..5):
 Mascaró protocol (two questions, 0..5): per laughter type and question, the mean over participants with a
 t-based 95% interval, and the rm-ANOVA of each question over the laughter types (and any varied factor).
 
-The ANOVA takes one value per participant and cell: the mean of the participant's trials in that cell (for
-example over the ten expressions of a condition). A participant without a value in every cell is dropped
-from that table (AnovaRM and rm_anova need a balanced design) and the table says how many and who. Tables of
-one or two factors come from pingouin's ``rm_anova`` (with the Greenhouse-Geisser corrected p-value and
-epsilon, as the paper reports); more factors from statsmodels' ``AnovaRM`` (uncorrected: it has no sphericity
-correction); both give the same F, degrees of freedom and p where both apply (tests/study).
+The ANOVAs are :func:`mien.study.anova.rm_anova` (one value per participant and cell; participants missing a
+cell dropped and named; pingouin for one or two factors, the balanced computation for more).
 """
 
 from __future__ import annotations
@@ -36,6 +32,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from mien.errors import InvalidValueError, MissingExtraError, UnknownNameError
+from mien.study.anova import AnovaTable, rm_anova
 from mien.study.quality import LABEL_PREFIX, label_intensity, label_question, quality_table
 
 if TYPE_CHECKING:
@@ -77,28 +74,6 @@ QUESTIONS: dict[str, tuple[str, ...]] = {
 """Protocol -> its questions other than the ``label:NAME`` emotion labels (Broekens only)."""
 
 _NOT_WITHIN = ("laughter_type", "description")  # one per laughter type: the expression itself
-
-
-@dataclass(frozen=True, eq=False)
-class AnovaTable:
-    """One repeated-measures ANOVA: a dependent measure over within-subject factors."""
-
-    measure: str
-    """The dependent measure (``"target_intensity"``, ``"naturalness"``, ``"label:joy"``, ``"feels_right"``...)."""
-    factors: tuple[str, ...]
-    """The within-subject factors."""
-    table: pd.DataFrame
-    """One row per effect: ``effect`` (factors joined by ``" x "``), ``F``, ``df1``, ``df2``, ``p`` (uncorrected),
-    ``p_gg`` and ``eps`` (Greenhouse-Geisser; NaN from AnovaRM), ``ng2`` (generalised eta squared; NaN from
-    AnovaRM). Empty when the test could not run (see :attr:`note`)."""
-    engine: str
-    """``"pingouin.rm_anova"`` or ``"statsmodels.AnovaRM"`` (or ``""`` when it did not run)."""
-    n_participants: int
-    """Participants in the test (every cell filled)."""
-    dropped: tuple[str, ...] = ()
-    """Participants left out because some cell of theirs had no answer."""
-    note: str = ""
-    """Why the test did not run, or what was left out; empty when nothing was."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -317,105 +292,6 @@ def _summary(trials: pd.DataFrame, measure: str, by: Sequence[str]) -> pd.DataFr
         key_values = key if isinstance(key, tuple) else (key,)
         rows.append([*key_values, *mean_ci(group[measure].to_numpy())])
     return pd.DataFrame(rows, columns=[*by, "n", "mean", "sd", "ci_low", "ci_high"])
-
-
-def rm_anova(trials: pd.DataFrame, measure: str, factors: Sequence[str], subject: str = "participant") -> AnovaTable:
-    """Repeated-measures ANOVA of ``measure`` over the within-subject ``factors`` (see the module docstring).
-
-    ``trials`` has a ``subject`` column, the ``factors`` columns and the ``measure`` column; each
-    participant's values are averaged per cell, participants missing a cell are dropped (and named). Factors
-    with one level are left out (noted). Never raises for the data's shape: a test that cannot run gives an
-    empty table with a :attr:`~AnovaTable.note`.
-    """
-    pd = _need_pandas()
-    columns = ["effect", "F", "df1", "df2", "p", "p_gg", "eps", "ng2"]
-    data = trials[[subject, *factors, measure]].dropna(subset=[measure])
-    data = data.assign(**{measure: data[measure].astype(np.float64)})
-    notes = []
-    used = [f for f in factors if data[f].nunique() > 1]
-    if len(used) < len(factors):
-        notes.append(f"one level only, left out: {', '.join(f for f in factors if f not in used)}")
-    if not used:
-        return AnovaTable(
-            measure, tuple(factors), pd.DataFrame(columns=columns), "", 0, (), "no factor with two levels"
-        )
-    cells = data.groupby([subject, *used], observed=True)[measure].mean().reset_index()
-    n_cells = math.prod(cells[f].nunique() for f in used)
-    counts = cells.groupby(subject).size()
-    complete = sorted(str(s) for s in counts.index[counts == n_cells])
-    dropped = tuple(sorted(str(s) for s in counts.index[counts != n_cells]))
-    if dropped:
-        notes.append(f"{len(dropped)} participant(s) without an answer in every cell dropped: {', '.join(dropped)}")
-    cells = cells[cells[subject].astype(str).isin(complete)]
-    if len(complete) < 2:
-        notes.append(f"{len(complete)} participant(s) with every cell: the test needs at least 2")
-        return AnovaTable(
-            measure, tuple(used), pd.DataFrame(columns=columns), "", len(complete), dropped, "; ".join(notes)
-        )
-    # patsy-safe names (a factor called "C" or with spaces would break AnovaRM's formula)
-    safe = {f: f"factor{i}" for i, f in enumerate(used)}
-    frame = cells.rename(columns={**safe, measure: "dv", subject: "subject"})
-    back = {v: k for k, v in safe.items()}
-    if len(used) <= 2:
-        table = _pingouin(frame, list(safe.values()), back)
-        engine = "pingouin.rm_anova"
-    else:
-        table = _statsmodels(frame, list(safe.values()), back)
-        engine = "statsmodels.AnovaRM"
-    return AnovaTable(measure, tuple(used), table[columns], engine, len(complete), dropped, "; ".join(notes))
-
-
-def _effect_name(source: str, back: dict[str, str], separator: str) -> str:
-    return " x ".join(back.get(part.strip(), part.strip()) for part in source.split(separator))
-
-
-def _pingouin(frame: pd.DataFrame, within: list[str], back: dict[str, str]) -> pd.DataFrame:
-    import warnings
-
-    try:
-        import pingouin
-    except ImportError:
-        raise MissingExtraError("pingouin", "study") from None
-    from scipy import stats
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # constant cells, tiny samples: the numbers say it
-        result = pingouin.rm_anova(
-            frame, dv="dv", within=within if len(within) > 1 else within[0], subject="subject",
-            correction=True, detailed=False,
-        )  # fmt: skip
-    out = result.rename(columns={"ddof1": "df1", "ddof2": "df2", "p_unc": "p", "p_GG_corr": "p_gg"})
-    out["effect"] = [_effect_name(s, back, "*") for s in out["Source"]]
-    for column in ("F", "p", "p_gg", "eps", "ng2"):  # a measure without variance comes back without F and p
-        out[column] = out[column].astype(np.float64) if column in out.columns else np.nan
-    for i in out.index:  # rm_anova leaves the one-way GG p out when sphericity holds; compute it the same way
-        if not np.isfinite(out.at[i, "p_gg"]) and np.isfinite(out.at[i, "eps"]) and np.isfinite(out.at[i, "F"]):
-            eps = float(out.at[i, "eps"])
-            out.at[i, "p_gg"] = float(stats.f.sf(out.at[i, "F"], out.at[i, "df1"] * eps, out.at[i, "df2"] * eps))
-    out["df1"] = out["df1"].astype(np.float64)
-    out["df2"] = out["df2"].astype(np.float64)
-    return out.reset_index(drop=True)
-
-
-def _statsmodels(frame: pd.DataFrame, within: list[str], back: dict[str, str]) -> pd.DataFrame:
-    pd = _need_pandas()
-    try:
-        from statsmodels.stats.anova import AnovaRM
-    except ImportError:
-        raise MissingExtraError("statsmodels", "study") from None
-    fitted = AnovaRM(frame, "dv", "subject", within=within).fit().anova_table
-    return pd.DataFrame(
-        {
-            "effect": [_effect_name(str(s), back, ":") for s in fitted.index],
-            "F": fitted["F Value"].to_numpy(np.float64),
-            "df1": fitted["Num DF"].to_numpy(np.float64),
-            "df2": fitted["Den DF"].to_numpy(np.float64),
-            "p": fitted["Pr > F"].to_numpy(np.float64),
-            "p_gg": np.nan,
-            "eps": np.nan,
-            "ng2": np.nan,
-        }
-    )
 
 
 def _default_factors(frame: pd.DataFrame, protocol: str) -> tuple[list[str], list[str]]:
