@@ -13,7 +13,6 @@ from __future__ import annotations
 import argparse
 import hashlib
 import html
-import importlib.metadata
 import platform
 import time
 from collections.abc import Mapping
@@ -24,6 +23,7 @@ import numpy as np
 
 from mien.htmlpage import STYLE as _STYLE
 from mien.htmlpage import img as _img
+from mien.htmlpage import library_versions
 from mien.htmlpage import num as _num
 from mien.htmlpage import pct as _pct
 from mien.htmlpage import table as _table
@@ -49,12 +49,7 @@ def environment(models: Mapping[str, str | None]) -> dict[str, Any]:
     from mien.facs.prototypes import PROTOTYPES_VERSION
     from mien.rig.mapping import AUMapping
 
-    libraries = {}
-    for name in _LIBRARIES:
-        try:
-            libraries[name] = importlib.metadata.version(name)
-        except importlib.metadata.PackageNotFoundError:
-            libraries[name] = "not installed"
+    libraries = library_versions(_LIBRARIES)
     return {
         "mien": __version__,
         "au_to_arkit_mapping_version": AUMapping.default().version,
