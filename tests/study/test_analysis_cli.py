@@ -62,3 +62,52 @@ def test_between_subject_factor_is_not_a_repeated_measure() -> None:
     assert result.anova["naturalness"].n_participants == 8
     assert any("between-subject factors" in note and "head" in note for note in result.notes)
     assert set(result.quality["factor"]) == {"all", "head", "basis", "view", "intensity"}
+
+
+def test_store_frame_analyses_like_the_csv(tmp_path: Path) -> None:
+    """The contract both ways: answers stored through a real SQLite Store come back from answers_frame() and
+    give the same analysis as the CSV they came from."""
+    from mien.study.storage import Store
+
+    answers = pd.read_csv(DATA / "broekens_small.csv", dtype=str, keep_default_na=False)
+    factors = ["head", "identity", "basis", "view", "distance_m", "intensity"]
+    stimuli = answers.drop_duplicates("stimulus").sort_values("stimulus")
+    store = Store(f"sqlite:///{tmp_path / 'study.sqlite'}")
+    try:
+        store.register_stimuli(
+            "tiny",
+            "broekens",
+            [
+                {
+                    "id": row["stimulus"],
+                    "file": f"{row['stimulus']}.mp4",
+                    "sha256": "0" * 64,
+                    "expression": row["expression"],
+                    "conditions": {f: (float(row[f]) if f in ("distance_m", "intensity") else row[f]) for f in factors},
+                    "duration_s": 1.0,
+                    "fps": 10,
+                }
+                for _, row in stimuli.iterrows()
+            ],
+        )
+        for participant, rows in answers.groupby("participant", sort=True):
+            sequence = tuple(rows.drop_duplicates("stimulus").sort_values("position")["stimulus"])
+            store.ensure_participant("tiny", participant, lambda _ordinal, s=sequence: (s, (), ()))
+            for (stimulus, position), trial in rows.groupby(["stimulus", "position"]):
+                ratings = {q: int(r) for q, r in zip(trial["question"], trial["rating"], strict=True)}
+                label_positions = {
+                    q: int(p) for q, p in zip(trial["question"], trial["label_position"], strict=True) if p != ""
+                }
+                shows = int(trial["nr_shows"].iloc[0])
+                assert store.record_answer(
+                    "tiny", participant, stimulus, int(position), ratings, label_positions, shows
+                )
+        frame = store.answers_frame("tiny")
+    finally:
+        store.close()
+    assert len(frame) == len(answers)
+    from_store = analyze(frame)
+    expected = analyze(answers)
+    pd.testing.assert_frame_equal(from_store.quality, expected.quality)
+    pd.testing.assert_frame_equal(from_store.profile, expected.profile)
+    assert from_store.anova["naturalness"].table["F"].tolist() == expected.anova["naturalness"].table["F"].tolist()
