@@ -16,10 +16,13 @@ the Broekens camera presets.
 
 from __future__ import annotations
 
+import logging
 from dataclasses import fields
 from typing import Any
 
 __all__ = ["EMOTION_INTENSITY_MAX", "IDLE_TOGGLES", "INTENSITY_LETTERS", "viewer_controls"]
+
+log = logging.getLogger(__name__)
 
 INTENSITY_LETTERS: tuple[str, ...] = ("A", "B", "C", "D", "E")
 """FACS intensity letters; letter ``i`` (0-based) is intensity ``i + 1`` on mien's 0..5 AU scale."""
@@ -88,6 +91,17 @@ def _idle() -> list[dict[str, Any]]:
     return [{"name": name, "flags": list(group)} for name, group in IDLE_TOGGLES.items()]
 
 
+def _clip_suffixes() -> list[str]:
+    try:
+        from mien.exchange import readable_suffixes
+
+        return sorted(readable_suffixes())
+    except Exception as exc:  # a broken format module must not take the page down: offer every file instead
+        # (only the file picker's filter depends on this; the server's clip endpoint names a bad suffix)
+        log.warning("mien viewer: clip formats unavailable (%s); the clip picker accepts any file", exc)
+        return []
+
+
 def viewer_controls() -> dict[str, Any]:
     """Everything the page's controls list, as a JSON-ready dict.
 
@@ -96,10 +110,12 @@ def viewer_controls() -> dict[str, Any]:
     ``blends`` (the built-in blends), ``emotion_intensity_max`` (2.4), ``pad_factors``, ``laughter`` (the 13
     types: ``type``, ``label``, ``family``, ``duration_s``, ``notes``), ``idle`` (toggles: ``name`` and the
     IdleSettings ``flags`` it sets), ``cameras`` (``name``, ``position_m`` and ``target_m`` in the rig frame,
-    metres; vertical ``fov_deg``; ``distance_m``).
+    metres; vertical ``fov_deg``; ``distance_m``), ``heads`` (head names a new character may use) and
+    ``clip_suffixes`` (file suffixes the server reads as clips).
     """
     from mien.affect.emotions import BLENDS, EMOTIONS
     from mien.affect.pad import PAD_FACTORS
+    from mien.rig.heads import HEADS
 
     return {
         "aus": _aus(),
@@ -112,4 +128,6 @@ def viewer_controls() -> dict[str, Any]:
         "laughter": _laughter(),
         "idle": _idle(),
         "cameras": _cameras(),
+        "heads": list(HEADS),
+        "clip_suffixes": _clip_suffixes(),
     }

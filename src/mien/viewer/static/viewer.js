@@ -114,7 +114,7 @@ async function api(method, path, body, contentType = "application/json") {
   return data;
 }
 
-const HTTP_ROUTES = { emotion: "emotion", pad: "pad", laughter: "laughter" };
+const HTTP_ROUTES = { emotion: "emotion", pad: "pad", laugh: "laughter" };
 
 /** Send a JSON command for the watched character: over the WebSocket, or the HTTP API when it is closed. */
 function send(command) {
@@ -198,7 +198,15 @@ function watch(characterId) {
 // ---------------------------------------------------------------------------------------------------------
 // The 3D scene.
 const canvas = $("view");
-const renderer = new THREE.WebGLRenderer({ canvas, antialias: true });
+/** True on a CPU rasteriser (SwiftShader, llvmpipe): multisampling there costs more than it shows. */
+function softwareRenderer() {
+  const gl = document.createElement("canvas").getContext("webgl2");
+  const info = gl && gl.getExtension("WEBGL_debug_renderer_info");
+  const name = info ? String(gl.getParameter(info.UNMASKED_RENDERER_WEBGL)) : "";
+  gl?.getExtension("WEBGL_lose_context")?.loseContext();
+  return /swiftshader|llvmpipe|softpipe|software/i.test(name);
+}
+const renderer = new THREE.WebGLRenderer({ canvas, antialias: !softwareRenderer() });
 renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
 renderer.toneMapping = THREE.ACESFilmicToneMapping;
 renderer.toneMappingExposure = 1.05;
@@ -244,7 +252,7 @@ function applyCameraPreset(preset) {
   state.needsRender = true;
 }
 
-const NECK_PIVOT_M = [0, -0.09, -0.05]; // fallback pivot (rig frame) when the glTF has no head node
+const NECK_PIVOT_M = [0, -0.09, -0.04]; // fallback pivot (rig frame) when the glTF has no head node
 
 async function loadHead(characterId) {
   const loading = (state.loadingHead = characterId);
@@ -290,27 +298,32 @@ function prepareHead(root) {
     mesh,
     map: Int32Array.from(namesOf(mesh), (n) => (order.has(n) ? order.get(n) : -1)),
   }));
-  // Head pose turns a pivot at the neck: the glTF's "head"/"neck" node when it has one, else a fixed point.
+  // Head pose turns the glTF's "head" node (mien's glb puts it at the neck pivot); a head without one is
+  // wrapped in a group at a typical neck position.
   let headNode = null;
   root.traverse((o) => {
-    if (!headNode && /^(head|neck)$/i.test(o.name) && !o.isMesh) headNode = o;
+    if (!headNode && /^head$/i.test(o.name) && !o.isMesh) headNode = o;
   });
   const pivot = new THREE.Group();
-  pivot.name = "mien-head-pivot";
-  const at = headNode ? headNode.getWorldPosition(new THREE.Vector3()).toArray() : NECK_PIVOT_M;
-  pivot.position.set(...at);
-  root.position.set(-at[0], -at[1], -at[2]);
+  pivot.name = "mien-head";
   pivot.add(root);
+  if (!headNode) {
+    pivot.position.set(...NECK_PIVOT_M);
+    root.position.set(-NECK_PIVOT_M[0], -NECK_PIVOT_M[1], -NECK_PIVOT_M[2]);
+  }
+  const poseNode = headNode || pivot;
+  const poseRest = poseNode.quaternion.clone();
   const eyes = [];
   root.traverse((o) => {
     if (/^eye[_ .-]?(l|r|left|right)$/i.test(o.name)) eyes.push({ node: o, rest: o.quaternion.clone() });
   });
-  return { root, pivot, meshes, names, eyes };
+  return { root, pivot, poseNode, poseRest, meshes, names, eyes };
 }
 
 const DEG = Math.PI / 180;
 const euler = new THREE.Euler();
 const gazeQuaternion = new THREE.Quaternion();
+const headQuaternion = new THREE.Quaternion();
 
 function applyFrame(frame) {
   const head = state.head;
@@ -323,7 +336,8 @@ function applyFrame(frame) {
   const [yaw, pitch, roll, gazeYaw, gazePitch] = frame.pose;
   // mien: yaw > 0 turns to the character's left (+x), pitch > 0 raises the chin, roll > 0 toward the left
   // shoulder; in three.js (+y up, +z toward the viewer) that is +y, -x and -z rotations.
-  head.pivot.rotation.set(-pitch * DEG, yaw * DEG, -roll * DEG, "YXZ");
+  headQuaternion.setFromEuler(euler.set(-pitch * DEG, yaw * DEG, -roll * DEG, "YXZ"));
+  head.poseNode.quaternion.copy(head.poseRest).multiply(headQuaternion);
   if (head.eyes.length) {
     gazeQuaternion.setFromEuler(euler.set(-gazePitch * DEG, gazeYaw * DEG, 0, "YXZ"));
     for (const eye of head.eyes) eye.node.quaternion.copy(eye.rest).multiply(gazeQuaternion);
@@ -466,7 +480,7 @@ function buildLaughter(types) {
   bindOutput(intensity, $("laughter-intensity-value"), 1);
   for (const t of types) {
     const title = `${t.family}, ${t.duration_s.toFixed(1)} s: ${t.notes}`;
-    box.append(button(t.label, () => send({ laughter: t.type, intensity: Number(intensity.value) }), { data: { laughter: t.type }, title }));
+    box.append(button(t.label, () => send({ laugh: t.type, intensity: Number(intensity.value) }), { data: { laughter: t.type }, title }));
   }
 }
 
@@ -603,14 +617,16 @@ async function refreshCharacters(preferred) {
   return ids;
 }
 
-function buildCharacters() {
+function buildCharacters(heads) {
   $("character-picker").addEventListener("change", (e) => watch(e.target.value));
+  $("character-new-head").replaceChildren(...heads.map((h) => new Option(h, h)));
   $("character-create").addEventListener("click", async () => {
-    const name = $("character-new-name").value.trim();
+    const typed = $("character-new-name").value.trim();
+    const id = typed || `character-${Date.now().toString(36).slice(-5)}`;
     try {
-      const created = await api("POST", "/api/characters", name ? { id: name } : {});
+      const created = await api("POST", "/api/characters", { id, head: $("character-new-head").value });
       $("character-new-name").value = "";
-      await refreshCharacters(created ? String(characterId(created)) : name);
+      await refreshCharacters(created ? String(characterId(created)) : id);
     } catch (error) {
       setStatus(error.message);
     }
@@ -631,7 +647,8 @@ function buildCharacters() {
   });
 }
 
-function buildClip() {
+function buildClip(suffixes) {
+  $("clip-file").accept = suffixes.join(",");
   $("clip-play").addEventListener("click", async () => {
     const file = $("clip-file").files[0];
     if (!file) {
@@ -640,7 +657,9 @@ function buildClip() {
     }
     if (!state.character) return;
     try {
-      const path = `/api/characters/${encodeURIComponent(state.character)}/clip?filename=${encodeURIComponent(file.name)}`;
+      const dot = file.name.lastIndexOf(".");
+      const suffix = dot >= 0 ? file.name.slice(dot).toLowerCase() : "";
+      const path = `/api/characters/${encodeURIComponent(state.character)}/clip?suffix=${encodeURIComponent(suffix)}`;
       await api("POST", path, await file.arrayBuffer(), "application/octet-stream");
       setStatus(`playing ${file.name}`);
     } catch (error) {
@@ -664,8 +683,8 @@ async function main() {
   buildLaughter(controls.laughter);
   buildIdle(controls.idle);
   buildActionUnits(controls);
-  buildCharacters();
-  buildClip();
+  buildCharacters(controls.heads);
+  buildClip(controls.clip_suffixes);
   await refreshCharacters(state.character);
   document.body.dataset.ready = "1";
 }

@@ -1,0 +1,300 @@
+"""The viewer in a real headless Chromium against a real ``mien serve`` (subprocess, ephemeral ports).
+
+The face must render, with no console or page errors; an OpenFACS UDP datagram and an emotion button must
+change the pixels of the mouth and brows, located by projecting the head's iBUG landmarks through the same
+camera preset the page starts with.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import math
+import os
+import re
+import socket
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("fastapi", reason="the serve extra is not installed")
+Image = pytest.importorskip("PIL.Image", reason="pillow is not installed (render extra)")
+
+from mien.facs.catalogue import ACTION_UNITS, OPENFACS_AUS  # noqa: E402
+from mien.viewer.vendor import three_dir  # noqa: E402
+
+VIEWPORT = {"width": 800, "height": 540}
+FIRST, SECOND = "calm", "other"  # two characters without idle motion, so only commands change pixels
+START_TIMEOUT_S = 30.0
+READY_TIMEOUT_MS = 30_000
+
+
+@dataclass(frozen=True)
+class Live:
+    """A running ``mien serve``."""
+
+    url: str
+    udp_port: int
+
+
+def _read_ports(process: subprocess.Popen[str], timeout_s: float) -> tuple[int, int]:
+    """UDP and HTTP ports from the server's start lines (bounded in time)."""
+    lines: list[str] = []
+    found: dict[str, int] = {}
+
+    def reader() -> None:
+        assert process.stdout is not None
+        for line in process.stdout:
+            lines.append(line)
+            if m := re.search(r"OpenFACS UDP on \S+:(\d+)", line):
+                found["udp"] = int(m.group(1))
+            if m := re.search(r"HTTP on http://\S+:(\d+)/", line):
+                found["http"] = int(m.group(1))
+            if len(found) == 2:
+                return
+
+    thread = threading.Thread(target=reader, daemon=True)
+    thread.start()
+    thread.join(timeout_s)
+    if len(found) != 2:
+        process.kill()
+        raise AssertionError(f"mien serve did not start in {timeout_s} s: {''.join(lines)[-2000:]}")
+    return found["udp"], found["http"]
+
+
+@pytest.fixture(scope="module")
+def live() -> Iterator[Live]:
+    """``mien serve`` with two idle-free built-in heads on ephemeral ports."""
+    if three_dir() is None:
+        pytest.skip("node_modules/three missing: run `npm ci`")
+    command = [sys.executable, "-m", "mien.cli", "serve", "--udp-port", "0", "--http-port", "0"]
+    command += ["--head", "builtin", "--no-idle", "--character", FIRST, "--character", SECOND]
+    process = subprocess.Popen(
+        command,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+    )
+    try:
+        udp_port, http_port = _read_ports(process, START_TIMEOUT_S)
+        yield Live(f"http://127.0.0.1:{http_port}", udp_port)
+    finally:
+        process.terminate()
+        try:
+            process.wait(10)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait(5)
+
+
+class Page:
+    """A browser page on the viewer that records console errors and page errors."""
+
+    def __init__(self, chromium: object, url: str) -> None:
+        self.page = chromium.new_page(viewport=VIEWPORT)  # type: ignore[attr-defined]
+        self.errors: list[str] = []
+        self.page.on("console", lambda m: m.type == "error" and self.errors.append(f"console: {m.text}"))
+        self.page.on("pageerror", lambda e: self.errors.append(f"pageerror: {e}"))
+        self.page.goto(url)
+        self.page.wait_for_function(
+            "document.body.dataset.ready === '1' && window.mienViewer.head !== null"
+            " && window.mienViewer.ticksSeen > 3 && window.mienViewer.renders > 1",
+            timeout=READY_TIMEOUT_MS,
+        )
+        box = self.page.locator("#view").bounding_box()
+        assert box is not None
+        self.box = box
+
+    def canvas(self, rows: slice | None = None, columns: slice | None = None) -> np.ndarray:
+        """(h, w, 3) uint8 pixels of the 3D view, or of its ``rows`` x ``columns`` part (a faster capture)."""
+        clip = dict(self.box)
+        if rows is not None and columns is not None:
+            clip = {"x": clip["x"] + columns.start, "y": clip["y"] + rows.start}
+            clip.update(width=columns.stop - columns.start, height=rows.stop - rows.start)
+        png = self.page.screenshot(clip=clip)
+        return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))
+
+    def settle(self, timeout_s: float = 5.0) -> np.ndarray:
+        """The view once two screenshots 0.15 s apart agree (bounded in time)."""
+        deadline = time.monotonic() + timeout_s
+        previous = self.canvas()
+        while time.monotonic() < deadline:
+            time.sleep(0.15)
+            current = self.canvas()
+            if np.abs(current[:-40].astype(int) - previous[:-40]).max() <= 2:  # the status line always changes
+                return current
+            previous = current
+        return previous
+
+    def close(self) -> None:
+        self.page.close()
+
+
+@pytest.fixture()
+def open_page(chromium: object, live: Live) -> Iterator[callable]:  # type: ignore[valid-type]
+    pages: list[Page] = []
+
+    def opener(character: str) -> Page:
+        page = Page(chromium, f"{live.url}/?character={character}")
+        pages.append(page)
+        return page
+
+    yield opener
+    for page in pages:
+        page.close()
+
+
+def _regions(width: int, height: int) -> dict[str, tuple[slice, slice]]:
+    """Pixel boxes (rows, columns) of the mouth and brows of the built-in head in the page's first camera."""
+    from mien.render.camera import CAMERA_PRESETS
+    from mien.rig.heads import load_head
+
+    rig = load_head("builtin")
+    points = rig.neutral[rig.landmarks]
+    pixels = CAMERA_PRESETS["frontal-1m"].project(points, width, height)
+    out = {}
+    for name, ids in (("mouth", range(48, 68)), ("brows", range(17, 27))):
+        (x0, y0), (x1, y1) = pixels[list(ids)].min(0), pixels[list(ids)].max(0)
+        margin = 8
+        out[name] = (
+            slice(max(int(y0) - margin, 0), min(int(y1) + margin, height)),
+            slice(max(int(x0) - margin, 0), min(int(x1) + margin, width)),
+        )
+    return out
+
+
+def _change(before: np.ndarray, after: np.ndarray, region: tuple[slice, slice]) -> float:
+    """Mean absolute RGB difference (0..255) inside ``region``."""
+    return float(np.abs(after[region].astype(float) - before[region].astype(float)).mean())
+
+
+def _save(image: np.ndarray, path: Path) -> None:
+    Image.fromarray(image).save(path)
+
+
+def test_face_renders_without_errors(open_page: callable, tmp_path: Path) -> None:  # type: ignore[valid-type]
+    page = open_page(FIRST)
+    image = page.settle()
+    _save(image, tmp_path / "neutral.png")
+    height, width = image.shape[:2]
+    background = image[2, 2].astype(int)
+    assert np.abs(image[[2, 2, -3, -3], [2, -3, 2, -3]].astype(int) - background).max() <= 3  # plain corners
+    centre = image[height // 4 : 3 * height // 4, width // 3 : 2 * width // 3].astype(int)
+    face = np.abs(centre - background).sum(axis=2) > 60
+    assert face.mean() > 0.8, f"only {face.mean():.0%} of the centre differs from the background"
+    skin = centre[face].mean(axis=0)
+    assert skin[0] > skin[2] + 20 and skin.mean() > 90, f"centre colour {skin} does not look like lit skin"
+    for region in _regions(width, height).values():
+        assert np.abs(image[region].astype(int) - background).sum(axis=2).mean() > 60  # the face is where we look
+    status = page.page.locator("#status-connection").inner_text()
+    assert status == "live"
+    assert re.match(r"tick \d+", page.page.locator("#status-tick").inner_text())
+    assert page.errors == []
+
+
+def test_au_sliders_come_from_the_catalogue(open_page: callable) -> None:  # type: ignore[valid-type]
+    page = open_page(FIRST)
+    labels = page.page.eval_on_selector_all("#au-sliders input[type=range]", "els => els.map(e => e.dataset.au)")
+    assert labels == [f"AU{code}" for code, au in ACTION_UNITS.items() if au.kind == "face"]
+    letters = page.page.eval_on_selector_all("#au-ticks option", "els => els.map(e => [e.value, e.label])")
+    assert letters == [[str(i + 1), letter] for i, letter in enumerate("ABCDE")]
+    laughs = page.page.eval_on_selector_all("#laughter-buttons button", "els => els.length")
+    assert laughs == 13
+    assert page.errors == []
+
+
+def _latency(page: Page, regions: dict[str, tuple[slice, slice]], send: Callable[[], None]) -> tuple[float, dict]:
+    """Seconds from ``send()`` until the mouth and brow pixels both change (mean > 3 of 255), polling
+    screenshots of just the box around them (small captures are fast); inf if not within 3 s."""
+    rows = slice(min(r.start for r, _ in regions.values()), max(r.stop for r, _ in regions.values()))
+    columns = slice(min(c.start for _, c in regions.values()), max(c.stop for _, c in regions.values()))
+    inside = {
+        name: (slice(r.start - rows.start, r.stop - rows.start), slice(c.start - columns.start, c.stop - columns.start))
+        for name, (r, c) in regions.items()
+    }
+    before = page.settle()[rows, columns]
+    sent = time.monotonic()
+    send()
+    changes: dict[str, float] = {}
+    while time.monotonic() - sent < 3.0:
+        now = page.canvas(rows, columns)
+        changes = {name: _change(before, now, region) for name, region in inside.items()}
+        if min(changes.values()) > 3.0:
+            return time.monotonic() - sent, changes
+    return math.inf, changes
+
+
+def test_openfacs_udp_changes_mouth_and_brows_within_a_second(
+    open_page: callable,  # type: ignore[valid-type]
+    live: Live,
+    tmp_path: Path,
+) -> None:
+    page = open_page(FIRST)
+    neutral = page.settle()
+    regions = _regions(neutral.shape[1], neutral.shape[0])
+    expressive = {f"AU{code}": 0 for code in OPENFACS_AUS}  # a plain OpenFACS datagram: every AU + Speed
+    expressive.update({"AU4": 5, "AU7": 3, "AU6": 4, "AU12": 5, "Speed": 0.3})  # anger brows, joy mouth
+    relaxed = {**{key: 0 for key in expressive}, "Speed": 0.3}
+
+    def datagram(message: dict[str, float]) -> Callable[[], None]:
+        def send() -> None:
+            with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as udp:
+                udp.sendto(json.dumps(message).encode(), ("127.0.0.1", live.udp_port))
+
+        return send
+
+    # Three changes (expressive, back to neutral, expressive again); the median must be under 1 s (one
+    # alone can stall on a loaded shared CPU rasteriser), and every one must change the pixels.
+    latencies = []
+    for message in (expressive, relaxed, expressive):
+        latency, changes = _latency(page, regions, datagram(message))
+        assert math.isfinite(latency), f"mouth/brow pixels did not change within 3 s: {changes}"
+        latencies.append(latency)
+    print(f"OpenFACS UDP -> mouth and brow pixels: {', '.join(f'{s:.3f}' for s in latencies)} s")
+    assert sorted(latencies)[1] < 1.0, f"median latency over 1 s: {latencies}"
+    after = page.settle()
+    _save(neutral, tmp_path / "before.png")
+    _save(after, tmp_path / "after.png")
+    assert min(_change(neutral, after, region) for region in regions.values()) > 3.0, f"see {tmp_path}"
+    corner = (slice(0, 40), slice(0, 40))
+    assert _change(neutral, after, corner) < 0.5  # the camera did not move: the face did
+    assert page.errors == []
+
+
+def test_emotion_button_changes_the_face(open_page: callable, tmp_path: Path) -> None:  # type: ignore[valid-type]
+    page = open_page(SECOND)
+    before = page.settle()
+    regions = _regions(before.shape[1], before.shape[0])
+    page.page.locator("#emotion-intensity").fill("2.4")
+    page.page.click("button[data-emotion=joy]")
+    deadline = time.monotonic() + 3.0
+    mouth = 0.0
+    after = before
+    while time.monotonic() < deadline and mouth <= 3.0:
+        after = page.canvas()
+        mouth = _change(before, after, regions["mouth"])
+    _save(after, tmp_path / "joy.png")
+    assert mouth > 3.0, f"the joy button did not move the mouth (mean change {mouth:.2f}; see {tmp_path})"
+    assert page.errors == []
+
+
+def test_characters_can_be_created_and_removed_from_the_page(open_page: callable) -> None:  # type: ignore[valid-type]
+    page = open_page(SECOND).page
+    page.fill("#character-new-name", "visitor")
+    page.select_option("#character-new-head", "builtin")
+    page.click("#character-create")
+    page.wait_for_function("window.mienViewer.character === 'visitor' && window.mienViewer.head", timeout=20_000)
+    options = page.eval_on_selector_all("#character-picker option", "els => els.map(e => e.value)")
+    assert options == [FIRST, SECOND, "visitor"]
+    page.click("#character-remove")
+    page.wait_for_function("window.mienViewer.character === 'calm'", timeout=20_000)
+    options = page.eval_on_selector_all("#character-picker option", "els => els.map(e => e.value)")
+    assert options == [FIRST, SECOND]
