@@ -166,8 +166,10 @@ def _anova_section(analysis: StudyAnalysis, figures: dict[str, Path]) -> str:
         lines.append(
             f"<p>Within-subject factors: <b>{_text(', '.join(analysis.factors))}</b>. One value per participant and "
             "cell (the mean of their trials in it); participants without a value in every cell are dropped (column "
-            "n, and the note). p: uncorrected; GG: Greenhouse-Geisser (pingouin, up to two factors). Label measures "
-            "are intensities 0..1; p &lt; 0.05 in red.</p>"
+            "n, and the note). p: uncorrected; GG: Greenhouse-Geisser corrected p and its epsilon; ng2: generalised "
+            "eta squared; p &lt; 0.05 in red."
+            + (" Label measures and target/mean intensity are intensities 0..1." if analysis.labels else "")
+            + "</p>"
         )
         lines.append(table(_ANOVA_HEADER, _anova_rows(list(analysis.anova.values()))))
     else:
