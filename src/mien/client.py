@@ -99,11 +99,16 @@ class WebSocketClient:
     def __init__(
         self, url: str, character: str | None = None, token: str | None = None, open_timeout_s: float = 5.0
     ) -> None:
+        from contextlib import ExitStack
+
         from websockets.exceptions import InvalidHandshake
         from websockets.sync.client import connect
 
+        self._stack = ExitStack()
         try:
-            self._ws = connect(_ws_url(url, character, token), open_timeout=open_timeout_s, max_size=2**20)
+            self._ws = self._stack.enter_context(
+                connect(_ws_url(url, character, token), open_timeout=open_timeout_s, max_size=2**20)
+            )
         except (OSError, InvalidHandshake) as exc:
             raise MienError(
                 f"cannot connect to {url}: {exc}; is `mien serve` running, and are the character and token right?"
@@ -122,7 +127,7 @@ class WebSocketClient:
 
     def close(self) -> None:
         """Close the connection."""
-        self._ws.close()
+        self._stack.close()
 
     def __enter__(self) -> WebSocketClient:
         return self

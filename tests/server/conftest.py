@@ -11,8 +11,8 @@ import pytest
 pytest.importorskip("fastapi", reason="the serve extra (pip install 'mien[serve]') is not installed")
 pytest.importorskip("uvicorn", reason="the serve extra (pip install 'mien[serve]') is not installed")
 
-from mien.server.app import ServeConfig, ServerThread  # noqa: E402
-from mien.server.registry import CharacterSpec  # noqa: E402
+from mien.server.app import ServeConfig, ServerThread
+from mien.server.registry import CharacterSpec
 
 OPENFACS_ORDER = (1, 2, 4, 5, 6, 7, 9, 10, 12, 14, 15, 17, 20, 23, 25, 26, 28, 45)
 """The AUs of the original client, in its key order."""

@@ -95,7 +95,7 @@ _json_values = st.recursive(
     lambda children: st.lists(children, max_size=4) | st.dictionaries(st.text(max_size=6), children, max_size=4),
     max_leaves=12,
 )
-_keys = st.sampled_from(sorted(AU_KEYS) + ["Speed", "emotion", "pad", "laugh", "character", "speeds", "x"])
+_keys = st.sampled_from([*sorted(AU_KEYS), "Speed", "emotion", "pad", "laugh", "character", "speeds", "x"])
 
 
 @settings(max_examples=300, deadline=None)

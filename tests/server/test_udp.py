@@ -27,7 +27,9 @@ def _record(live, character: str, channel: str) -> list[tuple[float, float]]:
     row = registry.get(character).row
     column = FACE_CHANNELS.index(channel)
     samples: list[tuple[float, float]] = []
-    live.call(lambda: live.server.clock.listeners.append(lambda tick, t: samples.append((t, registry.frames[row, column]))))
+    live.call(
+        lambda: live.server.clock.listeners.append(lambda tick, t: samples.append((t, registry.frames[row, column])))
+    )
     deadline = time.monotonic() + 3.0
     while len(samples) < 3 and time.monotonic() < deadline:  # a few still ticks first
         time.sleep(0.01)

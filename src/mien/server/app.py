@@ -123,16 +123,15 @@ class LiveServer:
         config = uvicorn.Config(app, log_level="warning", lifespan="off", ws="websockets-sansio", access_log=False)
         self._uvicorn = uvicorn.Server(config)
         self.started_monotonic = time.monotonic()
-        self._tasks = [
-            asyncio.create_task(self.clock.run(), name="mien-clock"),
-            asyncio.create_task(self._uvicorn.serve(sockets=[sock]), name="mien-http"),
-        ]
-        for _ in range(500):  # bounded: 5 s
-            if self._uvicorn.started or self._tasks[1].done():
+        http = asyncio.create_task(self._uvicorn.serve(sockets=[sock]), name="mien-http")
+        for _ in range(1000):  # bounded: 10 s
+            if self._uvicorn.started or http.done():
                 break
             await asyncio.sleep(0.01)
-        if self._tasks[1].done():
-            self._tasks[1].result()  # raise the start error
+        if http.done():
+            http.result()  # raise the start error
+        # the clock starts last, so start-up work is not counted as late ticks
+        self._tasks = [asyncio.create_task(self.clock.run(), name="mien-clock"), http]
         if not is_loopback(host):
             log.warning(
                 "mien serve listens on %s beyond loopback: HTTP and WebSocket need the access token "

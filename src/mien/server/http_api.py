@@ -341,7 +341,12 @@ def _read_clip(data: bytes, suffix: str) -> Any:
 
     if not suffix.startswith(".") or "/" in suffix or len(suffix) > 16:
         raise InvalidValueError("suffix", suffix, "a file suffix such as .json or .npz")
-    reader = reader_for(f"clip{suffix}")
+    try:
+        reader = reader_for(f"clip{suffix}")
+    except MienError:
+        raise
+    except ImportError as exc:
+        raise InvalidValueError("suffix", suffix, f"a clip format this install can read ({exc})") from None
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / f"clip{suffix}"
         path.write_bytes(data)

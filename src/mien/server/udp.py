@@ -46,8 +46,7 @@ async def open_udp(registry: Registry, host: str, port: int) -> tuple[asyncio.Da
     sock = socket.socket(family, socket.SOCK_DGRAM)
     try:
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, RECEIVE_BUFFER_BYTES)
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        sock.bind((host, port))
+        sock.bind((host, port))  # no SO_REUSEADDR: a second server on the port must fail, not share it
     except OSError:
         sock.close()
         raise
