@@ -104,3 +104,68 @@ def test_same_seed_same_face_different_seed_different_face():
 
     assert np.array_equal(run(1), run(1))
     assert not np.array_equal(run(1), run(2))
+
+
+def _reference_walks(seed: int, n_ticks: int) -> np.ndarray:
+    """The paper's walks tick by tick in plain Python, from the same counter-based draws (the pre-batch stream)."""
+    from mien.facs.counter_random import uniform
+
+    walks = (MOUTH_WALK, MOUTH_WALK, EYELID_WALK, NECK_WALK, NECK_WALK)
+    m = [0.0] * 5
+    out = []
+    for tick in range(n_ticks):
+        for w, spec in enumerate(walks):
+            if float(uniform(seed, 2 * w, tick)) < spec.move_probability:
+                up = float(uniform(seed, 2 * w + 1, tick)) < spec.up_probability(m[w])
+                m[w] = min(1.0, max(-1.0, m[w] + (spec.step if up else -spec.step)))
+        out.append(list(m))
+    return np.array(out)
+
+
+def test_walks_keep_the_seeded_stream_across_the_old_block_boundary():
+    idle = Idle(seed=21)
+    ticks = 1100  # past 512 and 1024, where the walks used to be recomputed a block at a time
+    positions = np.array([idle.walk_positions((k + 1) / 60.0) for k in range(ticks)])
+    np.testing.assert_array_equal(positions, _reference_walks(21, ticks))
+
+
+def test_every_step_draws_the_same_amount_of_randomness(monkeypatch):
+    """No step computes ahead: each 60 Hz step advances the walks one tick, one draw of (n, 10) uniforms."""
+    import mien.facs.idle as idle_module
+
+    sizes: list[int] = []
+    real = idle_module.uniform
+
+    def counting(seed, stream, counter):
+        values = real(seed, stream, counter)
+        sizes.append(values.size)
+        return values
+
+    batch = IdleBatch(np.arange(4), IdleSettings(blink=False, gaze=False))
+    monkeypatch.setattr(idle_module, "uniform", counting)
+    frames = np.zeros((4, len(FACE_CHANNELS)))
+    per_step = []
+    for i in range(1, 1200):
+        sizes.clear()
+        batch.apply(i / 60.0, frames)
+        per_step.append(sum(sizes))
+    assert set(per_step) == {4 * 10}
+
+
+def test_rows_with_their_own_settings_equal_single_idles():
+    settings = [IdleSettings(), IdleSettings(blink=False, tick_hz=30.0), None, IdleSettings(gaze_yaw_deg=20.0)]
+    batch = IdleBatch(np.zeros(0, int))
+    for seed, s in enumerate(settings):
+        batch.add_rows(np.array([seed + 3]), s)
+    singles = [Idle(seed + 3, s) if s is not None else None for seed, s in enumerate(settings)]
+    frames = np.zeros((4, len(FACE_CHANNELS)))
+    for i in range(1, 900):
+        t = i / 45.0
+        frames[:] = 0.0
+        batch.apply(t, frames)
+        for k, single in enumerate(singles):
+            frame = np.zeros(len(FACE_CHANNELS))
+            if single is not None:
+                single.apply(t, frame)
+            np.testing.assert_allclose(frames[k], frame, atol=1e-12)
+    assert not frames[2].any()

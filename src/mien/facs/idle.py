@@ -67,6 +67,9 @@ _WALK_A = np.array([w.a for w in _WALKS])
 _WALK_B = np.array([w.b for w in _WALKS])
 _WALK_STEP = np.array([w.step for w in _WALKS])
 _WALK_MOVE = np.array([w.move_probability for w in _WALKS])
+_TICK_SLACK = 1e-6
+"""Walk tick k is due from ``t * tick_hz >= k - 1e-6``: float rounding (123 / 60 * 60 = 122.99...) must not make a
+60 Hz step advance no tick and the next one two."""
 _BLINK_STREAM, _GAZE_STREAM, _GAZE_TIME_STREAM, _WOBBLE_STREAM = 100, 200, 201, 300
 
 
@@ -270,7 +273,7 @@ class IdleBatch:
         self._hold_low[rows], self._hold_high[rows] = s.gaze_hold_s
         seed = self.seeds[rows]
         zero = np.zeros(rows.size, np.uint64)
-        self._tick[rows] = int(t_s * s.tick_hz)
+        self._tick[rows] = math.floor(t_s * s.tick_hz + _TICK_SLACK)
         self._m[rows] = 0.0
         self._blink_k[rows] = 0
         self._blink_start[rows] = t_s + _blink_interval(s.blink_mean_s, s.blink_sd_s, s.blink_duration_s, seed, zero)
@@ -307,7 +310,7 @@ class IdleBatch:
 
         Advances each row's walks tick by tick (``tick_hz``) up to ``t_s``; returns the batch's own array.
         """
-        target = (t_s * self._num["tick_hz"]).astype(np.int64)
+        target = np.floor(t_s * self._num["tick_hz"] + _TICK_SLACK).astype(np.int64)
         behind = self._tick < target
         while behind.any():
             u = uniform(self.seeds[:, None], _WALK_STREAMS[None, :], self._tick.astype(np.uint64)[:, None])
