@@ -39,6 +39,8 @@ __all__ = ["Container", "load_container", "save_container"]
 META_KEY = "meta"
 """Name of the array holding the JSON metadata."""
 
+_SAVERS = {True: np.savez_compressed, False: np.savez}
+
 
 @dataclass(frozen=True, eq=False)
 class Container:
@@ -70,9 +72,12 @@ def save_container(
     """
     if META_KEY in arrays:
         raise InvalidValueError("arrays", META_KEY, f"array names other than {META_KEY!r}")
+    for key, array in arrays.items():
+        if np.asarray(array).dtype.kind == "O":  # would need pickle to read back, which loading refuses
+            raise InvalidValueError(f"arrays[{key!r}]", "an object array", "numeric, bool or string arrays")
     header = {"format": kind, "version": int(version), **meta}
     payload: dict[str, Any] = {META_KEY: np.array(json.dumps(header, sort_keys=True)), **arrays}
-    save = np.savez_compressed if compress else np.savez
+    save = _SAVERS[compress]
     if not isinstance(target, (str, os.PathLike)):
         save(target, **payload)
         return None

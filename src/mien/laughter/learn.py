@@ -56,6 +56,8 @@ __all__ = [
 
 CHECKPOINT_VERSION = 1
 """Bumped when per-video results change meaning, so old checkpoints are not reused."""
+CHECKPOINT_FORMAT = "mien-learn-checkpoint"
+"""Container kind of a per-video checkpoint (:mod:`mien.exchange.container`)."""
 MIN_TAKE_S = 0.5
 """Takes shorter than this (seconds) are rejected: too short to hold an onset, apex and offset."""
 LABEL_COLUMNS = ("video", "type", "performer")
@@ -227,21 +229,21 @@ def _checkpoint_path(work: Path, job: _VideoJob) -> Path:
 
 
 def _save_checkpoint(path: Path, outcome: _VideoOutcome) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
+    from mien.exchange.container import save_container
+
     meta = {"video": outcome.video, "fps": outcome.fps, "error": outcome.error, "n_takes": len(outcome.takes)}
     arrays = {f"take_{i}": values for i, values in enumerate(outcome.takes)}
-    tmp = path.with_name(path.name + ".part")
-    with tmp.open("wb") as handle:
-        np.savez(handle, meta=np.array(json.dumps(meta)), **arrays)  # type: ignore[arg-type]
-    tmp.replace(path)
+    save_container(path, CHECKPOINT_FORMAT, CHECKPOINT_VERSION, meta, arrays, compress=False)  # atomic
 
 
 def _load_checkpoint(path: Path) -> _VideoOutcome | None:
+    from mien.exchange.container import load_container
+
     try:
-        with np.load(path, allow_pickle=False) as data:
-            meta = json.loads(str(data["meta"][()]))
-            takes = tuple(np.array(data[f"take_{i}"]) for i in range(int(meta["n_takes"])))
-    except (OSError, ValueError, KeyError):
+        box = load_container(path, CHECKPOINT_FORMAT, CHECKPOINT_VERSION)
+        meta = box.meta
+        takes = tuple(box.arrays[f"take_{i}"] for i in range(int(meta["n_takes"])))
+    except (InvalidValueError, KeyError, ValueError, TypeError):
         return None  # damaged: compute again
     return _VideoOutcome(str(meta["video"]), takes, float(meta["fps"]), str(meta["error"]), True)
 

@@ -4,16 +4,16 @@ A library is what the learning pipeline (:mod:`mien.laughter.learn`) produces fr
 generator (:mod:`mien.laughter.generator`) plays back; the built-in one
 (:func:`mien.laughter.builtin_library.default_library`) has the same form.
 
-File format (``.npz``, version 1): one ``float64`` array ``curve/<type>`` of shape ``(n_frames, 16)`` per
-type (columns in :data:`~mien.laughter.names.CONTROLLER_NAMES` order), and ``meta``, a 0-d string array
-holding JSON: ``{"format": "mien-laugh-library", "version": 1, "source", "eps", "fps", "n_takes",
-"created", "method", "extra", "types", "channels"}``. Loading never unpickles objects.
+File format (``.npz``, version 1; a :mod:`mien.exchange.container`, written atomically): one ``float64`` array
+``curve/<type>`` of shape ``(n_frames, 16)`` per type (columns in :data:`~mien.laughter.names.CONTROLLER_NAMES`
+order), and ``meta``, a 0-d string array holding JSON: ``{"format": "mien-laugh-library", "version": 1,
+"source", "eps", "fps", "n_takes", "created", "method", "extra", "types", "channels"}``. Loading never unpickles
+objects.
 """
 
 from __future__ import annotations
 
 import datetime as _dt
-import json
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -121,12 +121,9 @@ class LaughLibrary:
             **self.metadata.to_dict(),
         }
         arrays: dict[str, np.ndarray] = {f"curve/{name}": clip.values for name, clip in self.curves.items()}
-        arrays["meta"] = np.array(json.dumps(meta, sort_keys=True))
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(path.name + ".part")
-        with tmp.open("wb") as handle:
-            np.savez_compressed(handle, **arrays)  # type: ignore[arg-type]
-        tmp.replace(path)
+        from mien.exchange.container import save_container
+
+        save_container(path, FORMAT_NAME, FORMAT_VERSION, meta, arrays)  # atomic: temporary file, then rename
         return path
 
     @classmethod
@@ -150,12 +147,11 @@ def load_library(path: str | Path) -> LaughLibrary:
     path = Path(path)
     if not path.is_file():
         raise InvalidValueError("library", str(path), "an existing .npz library file")
-    try:
-        with np.load(path, allow_pickle=False) as data:
-            meta = json.loads(str(data["meta"][()]))
-            arrays = {key: np.array(data[key]) for key in data.files if key.startswith("curve/")}
-    except (OSError, ValueError, KeyError) as exc:
-        raise InvalidValueError("library", str(path), f"a mien laugh library .npz ({exc})") from None
+    from mien.exchange.container import load_container
+
+    box = load_container(path)  # corrupt, truncated or foreign files raise naming the file
+    meta = box.meta
+    arrays = {key: value for key, value in box.arrays.items() if key.startswith("curve/")}
     if meta.get("format") != FORMAT_NAME:
         raise InvalidValueError("library format", meta.get("format"), f"{FORMAT_NAME!r}")
     version = meta.get("version")

@@ -34,7 +34,6 @@ import hashlib
 import json
 import os
 import sys
-import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -71,6 +70,9 @@ SPARSE_TOLERANCE_M = 1e-5
 """Vertices moving less than this (0.01 mm) at weight 1 are dropped from a sparse target."""
 
 _CACHE_VERSION = "ict-1"
+_CACHE_FORMAT = "mien-ict-cache"
+"""Container kind of the parsed-model cache (:mod:`mien.exchange.container`; written atomically)."""
+_CACHE_FORMAT_VERSION = 1
 
 ICT_PARTS: dict[str, tuple[int, int]] = {
     "face": (0, 9408),
@@ -351,15 +353,16 @@ def load_ict_facekit(
     arrays: dict[str, np.ndarray] | None = None
     cache_file = ict_cache_file(folder) if cache else None
     if cache_file is not None and cache_file.is_file():
+        from mien.exchange.container import load_container
+
         try:
-            with np.load(cache_file, allow_pickle=False) as data:
-                arrays = {key: data[key] for key in data.files}
-        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
+            arrays = load_container(cache_file, _CACHE_FORMAT, _CACHE_FORMAT_VERSION).arrays
+        except InvalidValueError:
             arrays = None  # a damaged cache is rebuilt
     if arrays is None:
         arrays = _parse(model)
         if cache_file is not None:
-            partial = cache_file.with_suffix(f".{os.getpid()}.tmp.npz")
-            np.savez(partial, **arrays)  # type: ignore[arg-type]
-            os.replace(partial, cache_file)
+            from mien.exchange.container import save_container
+
+            save_container(cache_file, _CACHE_FORMAT, _CACHE_FORMAT_VERSION, {"model": str(model)}, arrays, False)
     return _build(arrays, coeffs, "ict-facekit")

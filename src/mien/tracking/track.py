@@ -52,6 +52,12 @@ MAX_GAP_S = 0.2
 TRACKER_VERSION = 1
 """Bumped whenever per-frame tracking output changes, so old cache entries are not reused."""
 
+TRACK_FORMAT = "mien-track"
+"""Container kind of a ``.npz`` track file (:mod:`mien.exchange.container`)."""
+
+TRACK_FORMAT_VERSION = 1
+"""Track file version written (and the newest read; files from before the container read as version 0)."""
+
 
 @dataclass(frozen=True, eq=False)
 class Track:
@@ -155,11 +161,13 @@ class Track:
         }
 
     def save(self, path: str | os.PathLike[str]) -> Path:
-        """Write to ``.npz`` (arrays + a ``meta`` JSON string) or ``.json`` (NaN as null); returns the path."""
+        """Write to ``.npz`` (a :mod:`mien.exchange.container` of kind ``mien-track``, written atomically) or
+        ``.json`` (NaN as null); returns the path."""
         out = Path(path)
         if out.suffix == ".npz":
-            arrays: dict[str, Any] = {"meta": np.array(json.dumps(self.meta())), **self.arrays()}
-            np.savez_compressed(out, **arrays)
+            from mien.exchange.container import save_container
+
+            save_container(out, TRACK_FORMAT, TRACK_FORMAT_VERSION, self.meta(), self.arrays())
         elif out.suffix == ".json":
             data: dict[str, Any] = self.meta()
             for key, value in self.arrays().items():
@@ -183,9 +191,10 @@ def load_track(path: str | os.PathLike[str]) -> Track:
     file = Path(path)
     try:
         if file.suffix == ".npz":
-            with np.load(file, allow_pickle=False) as data:
-                meta = json.loads(str(data["meta"]))
-                arrays = {k: data[k] for k in data.files if k != "meta"}
+            from mien.exchange.container import load_container
+
+            box = load_container(file, TRACK_FORMAT, TRACK_FORMAT_VERSION)
+            meta, arrays = box.meta, box.arrays
         elif file.suffix == ".json":
             raw = json.loads(file.read_text("utf-8"))
             meta = {k: raw[k] for k in ("source", "fps", "width", "height", "max_gap_s")}
@@ -366,9 +375,7 @@ def track_video(
             cached.unlink(missing_ok=True)  # a damaged cache entry: track again
     raw = _track_frames(path, model_path, min_confidence, info, show_progress)
     if cached is not None:
-        partial = cached.with_name(f"{cached.stem}.{os.getpid()}.partial.npz")  # atomic publish below
-        raw.save(partial)
-        partial.replace(cached)
+        raw.save(cached)  # atomic: a temporary file, then a rename
     return apply_gaps(raw, max_gap_s)
 
 
