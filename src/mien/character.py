@@ -427,7 +427,9 @@ class CharacterBatch:
         if laughing is not None:
             mouth_scale[laughing] = 0.0
         self.idle.apply(t, frames, mouth_scale)
-        np.clip(frames[:, :_N_AU], 0.0, 5.0, out=frames[:, :_N_AU])
+        aus = frames[:, :_N_AU]
+        np.maximum(aus, 0.0, out=aus)
+        np.minimum(aus, 5.0, out=aus)
         if self._free:
             frames[self._free] = 0.0
         return frames

@@ -311,17 +311,21 @@ class IdleBatch:
         Advances each row's walks tick by tick (``tick_hz``) up to ``t_s``; returns the batch's own array.
         """
         target = np.floor(t_s * self._num["tick_hz"] + _TICK_SLACK).astype(np.int64)
-        behind = self._tick < target
-        while behind.any():
-            u = uniform(self.seeds[:, None], _WALK_STREAMS[None, :], self._tick.astype(np.uint64)[:, None])
-            move = (u[:, 0::2] < _WALK_MOVE) & behind[:, None]
-            m = self._m
+        lag = target - self._tick
+        if not lag.size:
+            return self._m
+        m = self._m
+        for j in range(int(lag.max())):  # one pass per tick due (one at 60 Hz steps)
+            u = uniform(self.seeds[:, None], _WALK_STREAMS[None, :], (self._tick + j).astype(np.uint64)[:, None])
+            move = u[:, 0::2] < _WALK_MOVE
+            if j >= lag.min():
+                move &= (lag > j)[:, None]  # rows with fewer ticks due stop here
             up = u[:, 1::2] < 1.0 - (_WALK_A + _WALK_B * m)
             stepped = np.where(up, m + _WALK_STEP, m - _WALK_STEP)
-            np.clip(stepped, -1.0, 1.0, out=stepped)
+            np.minimum(stepped, 1.0, out=stepped)
+            np.maximum(stepped, -1.0, out=stepped)
             np.copyto(m, stepped, where=move)
-            self._tick += behind
-            behind = self._tick < target
+        np.maximum(self._tick, target, out=self._tick)
         return self._m
 
     def blink(self, t_s: float) -> np.ndarray:
