@@ -149,3 +149,26 @@ def test_a_token_is_generated_beyond_loopback() -> None:
     server = LiveServer(ServeConfig(host="0.0.0.0", udp_port=0, http_port=0))
     assert server.token is not None and len(server.token) >= 16
     assert LiveServer(ServeConfig(host="127.0.0.1")).token is None
+
+
+def test_pad_and_feature_point_characters(live, wait_until) -> None:
+    base = live.base_url
+    assert (
+        httpx.post(f"{base}/api/characters/a/pad", json={"pleasure": 0.8, "arousal": 0.5, "dominance": 0.2}).status_code
+        == 202
+    )
+    wait_until(lambda: httpx.get(f"{base}/api/characters/a").json()["aus"]["AU12L"] > 0.5, what="PAD joy on a")
+    body = {"id": "fp", "head": "builtin", "idle": False, "expression_basis": "feature_points"}
+    created = httpx.post(f"{base}/api/characters", json=body).json()
+    assert any(name.startswith("fp_") for name in created["target_names"])
+    assert httpx.post(f"{base}/api/characters/fp/emotion", json={"emotion": "joy", "intensity": 2}).status_code == 202
+    state = wait_until(
+        lambda: (
+            (s := httpx.get(f"{base}/api/characters/fp").json())
+            and max(abs(v) for k, v in s["weights"].items() if k.startswith("fp_")) > 1e-4
+            and s
+        ),
+        what="feature-point targets moving",
+    )
+    assert state["aus"]["AU12L"] == 0.0  # the feature-point basis leaves the AU channels alone
+    assert httpx.get(f"{base}/api/characters/b").json()["aus"]["AU12L"] == 0.0

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import re
 from collections import deque
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -48,10 +47,6 @@ class CharacterSpec:
             raise InvalidValueError("id", self.id, "1-64 characters of A-Z a-z 0-9 _ . -")
 
 
-Driver = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
-"""(n, 62) face frames -> ((n, n_targets) float32 weights 0..1, (n, 5) pose degrees)."""
-
-
 @dataclass
 class Entry:
     """One character of the registry."""
@@ -62,8 +57,8 @@ class Entry:
     """Its row in the batch."""
     rig: Any
     """Its :class:`mien.rig.model.Rig`."""
-    driver: Driver
-    """Face frames -> morph weights and pose."""
+    driver: Any
+    """Its :class:`mien.rig.driver.RigDriver` (face frames -> morph weights and pose)."""
     state: Message | None = None
     """Newest state message not yet applied."""
     events: deque[Message] = field(default_factory=lambda: deque(maxlen=MAX_EVENTS_PER_CHARACTER))
@@ -72,25 +67,13 @@ class Entry:
     """:class:`~mien.facs.clip.Clip` objects to start playing at the next tick."""
 
 
-def _driver_for(rig: Any) -> Driver:
-    try:
-        from mien.rig.driver import RigDriver  # type: ignore[import-not-found,unused-ignore]
-    except ImportError:
-        from mien.rig.mapping import AUMapping
-
-        mapping = AUMapping.default().weights_for(rig)
-        return lambda frames: (mapping.to_weights(frames), frames[:, -5:])
-    driver = RigDriver(rig)
-    return lambda frames: (driver.weights(frames), driver.pose(frames))
-
-
 class Registry:
     """Characters stepped together; see the module docstring."""
 
     def __init__(self, counters: Counters | None = None) -> None:
-        from mien.server._engine_compat import new_batch
+        from mien.character import CharacterBatch
 
-        self.batch = new_batch()
+        self.batch = CharacterBatch(0)
         """The one :class:`~mien.character.CharacterBatch` of every character."""
         self.counters = counters or Counters()
         """Counters shared with the transports."""
@@ -100,7 +83,7 @@ class Registry:
         """(n_rows, 62) face frames of the last step."""
         self.time_s = 0.0
         """Time of the last step, seconds."""
-        self._rigs: dict[tuple[str, str | None], tuple[Any, Driver]] = {}
+        self._rigs: dict[tuple[str, str | None, bool], tuple[Any, Any]] = {}
         self._log = RateLimitedLog()
 
     # ------------------------------------------------------------------ characters
@@ -119,12 +102,13 @@ class Registry:
             raise InvalidValueError("id", spec.id, "an id not in use (DELETE it first)")
         if spec.expression_basis not in EXPRESSION_BASES:
             raise UnknownNameError("expression basis", spec.expression_basis, EXPRESSION_BASES)
-        key = (spec.head, spec.identity)
+        key = (spec.head, spec.identity, spec.expression_basis == "feature_points")
         if key not in self._rigs:
+            from mien.rig.driver import RigDriver
             from mien.rig.heads import load_head
 
-            rig = load_head(spec.head, spec.identity)
-            self._rigs[key] = (rig, _driver_for(rig))
+            rig = load_head(spec.head, spec.identity, feature_points=key[2])
+            self._rigs[key] = (rig, RigDriver(rig))
         rig, driver = self._rigs[key]
         row = int(self.batch.add_character(seed=spec.seed, idle=spec.idle, expression_basis=spec.expression_basis))
         entry = Entry(spec, row, rig, driver)
@@ -214,8 +198,11 @@ class Registry:
 
     def rig_output(self, entry: Entry) -> tuple[np.ndarray, np.ndarray]:
         """``(weights (n_targets,) float32, pose (5,) degrees)`` of ``entry`` at the last step."""
-        weights, pose = entry.driver(self.frames[entry.row : entry.row + 1])
-        return weights[0], pose[0]
+        frames = self.frames[entry.row : entry.row + 1]
+        features = None
+        if entry.spec.expression_basis == "feature_points":
+            features = self.batch.feature_weights[entry.row : entry.row + 1]
+        return entry.driver.weights(frames, feature_weights=features)[0], entry.driver.pose(frames)[0]
 
     def state(self, entry: Entry) -> dict[str, Any]:
         """The character's face frame at the last step as ``{channel: value}`` (AUs 0..5, pose degrees)."""
