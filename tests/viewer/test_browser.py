@@ -31,7 +31,7 @@ from mien.facs.catalogue import ACTION_UNITS, OPENFACS_AUS  # noqa: E402
 from mien.viewer.vendor import three_dir  # noqa: E402
 
 VIEWPORT = {"width": 800, "height": 540}
-FIRST, SECOND = "calm", "other"  # two characters without idle motion, so only commands change pixels
+FIRST, SECOND, THIRD = "calm", "other", "third"  # characters without idle motion: only commands move them
 START_TIMEOUT_S = 30.0
 READY_TIMEOUT_MS = 30_000
 
@@ -75,7 +75,9 @@ def live() -> Iterator[Live]:
     if three_dir() is None:
         pytest.skip("node_modules/three missing: run `npm ci`")
     command = [sys.executable, "-m", "mien.cli", "serve", "--udp-port", "0", "--http-port", "0"]
-    command += ["--head", "builtin", "--no-idle", "--character", FIRST, "--character", SECOND]
+    command += ["--head", "builtin", "--no-idle"]
+    for character in (FIRST, SECOND, THIRD):
+        command += ["--character", character]
     process = subprocess.Popen(
         command,
         stdout=subprocess.PIPE,
@@ -204,8 +206,10 @@ def test_au_sliders_come_from_the_catalogue(open_page: callable) -> None:  # typ
     page = open_page(FIRST)
     labels = page.page.eval_on_selector_all("#au-sliders input[type=range]", "els => els.map(e => e.dataset.au)")
     assert labels == [f"AU{code}" for code, au in ACTION_UNITS.items() if au.kind == "face"]
-    letters = page.page.eval_on_selector_all("#au-ticks option", "els => els.map(e => [e.value, e.label])")
-    assert letters == [[str(i + 1), letter] for i, letter in enumerate("ABCDE")]
+    letters = page.page.eval_on_selector_all(
+        "#au-sliders .au:first-child .letters span", "els => els.map(e => e.textContent)"
+    )
+    assert letters == ["A", "B", "C", "D", "E"]
     laughs = page.page.eval_on_selector_all("#laughter-buttons button", "els => els.length")
     assert laughs == 13
     assert page.errors == []
@@ -293,8 +297,56 @@ def test_characters_can_be_created_and_removed_from_the_page(open_page: callable
     page.click("#character-create")
     page.wait_for_function("window.mienViewer.character === 'visitor' && window.mienViewer.head", timeout=20_000)
     options = page.eval_on_selector_all("#character-picker option", "els => els.map(e => e.value)")
-    assert options == [FIRST, SECOND, "visitor"]
+    assert options == [FIRST, SECOND, THIRD, "visitor"]
     page.click("#character-remove")
     page.wait_for_function("window.mienViewer.character === 'calm'", timeout=20_000)
     options = page.eval_on_selector_all("#character-picker option", "els => els.map(e => e.value)")
-    assert options == [FIRST, SECOND]
+    assert options == [FIRST, SECOND, THIRD]
+
+
+def _wait_for_change(page: Page, before: np.ndarray, region: tuple[slice, slice], timeout_s: float = 3.0) -> float:
+    """Mean change of ``region`` once it exceeds 3 of 255, or the last value after ``timeout_s``."""
+    deadline = time.monotonic() + timeout_s
+    change = 0.0
+    while time.monotonic() < deadline and change <= 3.0:
+        change = _change(before, page.canvas(), region)
+    return change
+
+
+def test_au_slider_laughter_and_clip_drive_the_face(open_page: callable, tmp_path: Path) -> None:  # type: ignore[valid-type]
+    from mien.exchange.clip_json import write
+    from mien.facs.catalogue import FACE_CHANNELS
+    from mien.facs.clip import Clip
+
+    page = open_page(THIRD)
+    neutral = page.settle()
+    mouth = _regions(neutral.shape[1], neutral.shape[0])["mouth"]
+
+    page.page.locator("#au-sliders input[data-au=AU12]").fill("5")  # an AU slider: full state over the socket
+    assert _wait_for_change(page, neutral, mouth) > 3.0
+    assert page.page.locator("#au-sliders .au:has(input[data-au=AU12]) output").inner_text() == "E"  # FACS letter
+    page.page.click("#au-reset")
+    back = page.settle()
+    assert _change(neutral, back, mouth) < 1.0  # reset: every AU to 0 again
+
+    page.page.click("button[data-laughter=laughter]")
+    assert _wait_for_change(page, back, mouth) > 3.0
+    page.settle(timeout_s=8.0)  # the laugh runs its course
+
+    values = np.zeros((30, len(FACE_CHANNELS)))
+    values[:, FACE_CHANNELS.index("AU26")] = np.linspace(0.0, 5.0, 30)  # jaw drop over 1 s
+    clip_path = tmp_path / "jaw.json"
+    write(Clip(values, 30.0, FACE_CHANNELS), clip_path)
+    before = page.settle()
+    page.page.set_input_files("#clip-file", str(clip_path))
+    page.page.click("#clip-play")
+    assert _wait_for_change(page, before, mouth) > 3.0
+    assert "playing jaw.json" in page.page.locator("#status-message").inner_text()
+    _save(page.canvas(), tmp_path / "clip.png")
+    assert page.errors == []
+
+
+def test_idle_switches_show_the_characters_setting(open_page: callable) -> None:  # type: ignore[valid-type]
+    page = open_page(FIRST).page
+    flags = page.eval_on_selector_all("#idle-toggles input", "els => els.map(e => [e.dataset.idle, e.checked])")
+    assert flags == [["blink", False], ["micro-motion", False], ["gaze", False]]  # started with --no-idle

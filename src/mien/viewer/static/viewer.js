@@ -58,6 +58,7 @@ export function decodeFrame(buffer) {
 const state = {
   controls: null,
   character: params.get("character"),
+  characters: new Map(), // id -> the server's character info (GET /api/characters)
   ws: null,
   wsOpen: false,
   reconnectMs: 500,
@@ -190,6 +191,7 @@ function watch(characterId) {
   url.searchParams.set("character", characterId);
   history.replaceState(null, "", url);
   state.frame = null;
+  showIdle(state.characters.get(characterId));
   loadHead(characterId);
   if (state.wsOpen) state.ws.send(JSON.stringify({ watch: characterId }));
   else if (!state.ws || state.ws.readyState > 1) connect();
@@ -505,14 +507,13 @@ function buildIdle(toggles) {
   }
 }
 
+/** Show a character's idle switches as the server reports them (``idle``: all on or all off). */
+function showIdle(info) {
+  if (!info || typeof info.idle !== "boolean") return;
+  document.querySelectorAll("#idle-toggles input").forEach((input) => (input.checked = info.idle));
+}
+
 function buildActionUnits(controls) {
-  const ticks = $("au-ticks");
-  for (let v = 1; v <= controls.au_max; v++) {
-    const option = document.createElement("option");
-    option.value = v;
-    option.label = controls.intensity_letters[v - 1];
-    ticks.append(option);
-  }
   const box = $("au-sliders");
   const sliders = [];
   const sendState = () => {
@@ -536,16 +537,17 @@ function buildActionUnits(controls) {
     input.max = controls.au_max;
     input.step = 0.1;
     input.value = 0;
-    input.setAttribute("list", "au-ticks");
     input.dataset.au = au.label;
     input.setAttribute("aria-label", `${au.label} ${au.name}`);
     const letters = document.createElement("div");
     letters.className = "letters";
-    for (const letter of controls.intensity_letters) {
+    controls.intensity_letters.forEach((letter, i) => {
+      // FACS letter i is intensity i + 1: mark it under that slider position (the thumb is 16 px wide)
       const span = document.createElement("span");
       span.textContent = letter;
+      span.style.left = `calc(8px + (100% - 16px) * ${(i + 1) / controls.au_max})`;
       letters.append(span);
-    }
+    });
     track.append(input, letters);
     const output = document.createElement("output");
     const show = () => {
@@ -605,6 +607,7 @@ async function refreshCharacters(preferred) {
   }
   const entries = Array.isArray(list) ? list : list.characters || [];
   const ids = entries.map(characterId).filter((id) => id !== undefined && id !== null).map(String);
+  state.characters = new Map(entries.map((entry) => [String(characterId(entry)), entry]));
   const picker = $("character-picker");
   picker.replaceChildren(...ids.map((id) => new Option(id, id)));
   const chosen = ids.includes(preferred) ? preferred : ids[0];
