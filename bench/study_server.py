@@ -1,15 +1,16 @@
 """200 simulated participants answering at once against one ``mien study serve`` process: every answer stored,
 the 99th-percentile answer latency (target < 100 ms), against a named baseline measured in the same run.
 
-Run: .venv/bin/python bench/study_server.py [--participants 200] [--stimuli 10] [--no-postgres]
+Run: .venv/bin/python bench/study_server.py [--participants 200] [--no-postgres]
 
 Each participant (an asyncio task sharing one httpx client) opens a session, gives consent, then for each
-stimulus posts a play (``/api/show``) and, after a think time of 0.2-1.0 s, its 11 ratings
+stimulus posts a play (``/api/show``) and, after a think time of 2-6 s (:data:`THINK_S`), its 11 ratings
 (``/api/answer``, one committed transaction). Baseline ``health``: the bare FastAPI endpoint ``GET
 /api/health`` (no database), requested by the same participants right before each answer, so both see the
-same load. Prints p50/p99/max latency of both and their ratio, and checks the database holds exactly every
-answer. Runs on SQLite, then on a PostgreSQL server started in a temporary folder (when Debian's binaries
-are installed).
+same load. Prints p50/p99/max latency of both and their ratio, the answer handler's own time (its
+``Server-Timing`` header: validation, commit and progress read, without queueing), the machine's load
+average, and checks the database holds exactly every answer. Runs on SQLite, then on a PostgreSQL server
+started in a temporary folder (when Debian's binaries are installed).
 """
 
 from __future__ import annotations
@@ -42,6 +43,14 @@ size = 32
 """
 
 
+ARRIVAL_S = 10.0
+"""Participants arrive at uniform random times over the first 10 s."""
+
+THINK_S = (2.0, 6.0)
+"""Seconds between a stimulus's play and its answer (uniform). People in the Broekens study took 15-30
+minutes for 60 stimuli (15-30 s each); 2-6 s is 5x faster than that, so the load is pessimistic."""
+
+
 def free_port() -> int:
     with socket.socket() as probe:
         probe.bind(("127.0.0.1", 0))
@@ -54,6 +63,7 @@ def percentile(values: list[float], q: float) -> float:
 
 
 async def participant(client, index: int, latencies: dict[str, list[float]], rng: random.Random) -> int:  # type: ignore[no-untyped-def]
+    await asyncio.sleep(rng.uniform(0.0, ARRIVAL_S))
     session = (await client.post("/api/session", json={"participant": f"bench-{index}"})).json()
     await client.post("/api/consent", json={"participant": session["participant"]})
     ratings = {q["key"]: rng.randint(q["low"], q["high"]) for q in session["questions"]}
@@ -62,7 +72,7 @@ async def participant(client, index: int, latencies: dict[str, list[float]], rng
         await client.post(
             "/api/show", json={"participant": session["participant"], "stimulus": item["stimulus"], "nr_shows": 1}
         )
-        await asyncio.sleep(rng.uniform(0.2, 1.0))
+        await asyncio.sleep(rng.uniform(*THINK_S))
         start = time.perf_counter()
         reply = await client.get("/api/health")
         latencies["health"].append(time.perf_counter() - start)
@@ -78,6 +88,7 @@ async def participant(client, index: int, latencies: dict[str, list[float]], rng
         reply = await client.post("/api/answer", json=body)
         latencies["answer"].append(time.perf_counter() - start)
         assert reply.status_code == 200, reply.text
+        latencies["server"].append(float(reply.headers["server-timing"].split("dur=")[1]) / 1000)
         stored += reply.json()["stored"]
     return stored
 
@@ -85,7 +96,7 @@ async def participant(client, index: int, latencies: dict[str, list[float]], rng
 async def run_participants(url: str, n: int) -> tuple[dict[str, list[float]], int, float]:
     import httpx
 
-    latencies: dict[str, list[float]] = {"health": [], "answer": []}
+    latencies: dict[str, list[float]] = {"health": [], "answer": [], "server": []}
     limits = httpx.Limits(max_connections=n, max_keepalive_connections=n)
     async with httpx.AsyncClient(base_url=url, limits=limits, timeout=30.0) as client:
         start = time.perf_counter()
@@ -143,6 +154,7 @@ def start_postgres(folder: Path) -> tuple[str, list[str], str] | None:
 def measure(name: str, design: Path, db: str, n: int, n_stimuli: int) -> None:
     from mien.study.storage import Store
 
+    load = os.getloadavg()[0]
     process, url = start_server(design, db)
     try:
         latencies, stored, wall = asyncio.run(run_participants(url, n))
@@ -154,8 +166,14 @@ def measure(name: str, design: Path, db: str, n: int, n_stimuli: int) -> None:
     expected = n * n_stimuli * 11
     ms = {k: [v * 1000 for v in values] for k, values in latencies.items()}
     print(f"{name}: {n} participants x {n_stimuli} stimuli in {wall:.1f} s; answers stored {in_db}/{expected} "
-          f"({'all' if in_db == expected == stored else 'MISSING'})")  # fmt: skip
-    for key, label in (("answer", "POST /api/answer (DB commit)"), ("health", "baseline GET /api/health (no DB)")):
+          f"({'all' if in_db == expected == stored else 'MISSING'}); machine load average {load:.1f} -> "
+          f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs")  # fmt: skip
+    rows = (
+        ("answer", "POST /api/answer (DB commit)"),
+        ("health", "baseline GET /api/health (no DB)"),
+        ("server", "answer handler alone (Server-Timing)"),
+    )
+    for key, label in rows:
         values = ms[key]
         print(f"  {label:34s} p50 {statistics.median(values):6.1f} ms  p99 {percentile(values, 99):6.1f} ms  "
               f"max {max(values):6.1f} ms  (n={len(values)})")  # fmt: skip
@@ -182,17 +200,19 @@ def main() -> None:
         measure("SQLite", design_path, f"sqlite:///{folder / 'bench.sqlite'}", args.participants, n_stimuli)
         if args.no_postgres:
             return
-        pg_folder = folder / "pg"
-        pg_folder.mkdir()
-        started = start_postgres(pg_folder)
-        if started is None:
-            print("PostgreSQL: server binaries not found, skipped")
-            return
-        url, pg_ctl, data = started
+        pg_folder = Path(tempfile.mkdtemp(prefix="mien-bench-pg-"))  # not inside a 0700 folder: postgres reads it
         try:
-            measure("PostgreSQL", design_path, url, args.participants, n_stimuli)
+            started = start_postgres(pg_folder)
+            if started is None:
+                print("PostgreSQL: server binaries not found, skipped")
+                return
+            url, pg_ctl, data = started
+            try:
+                measure("PostgreSQL", design_path, url, args.participants, n_stimuli)
+            finally:
+                subprocess.run([*pg_ctl, "-D", data, "-m", "fast", "stop"], capture_output=True)
         finally:
-            subprocess.run([*pg_ctl, "-D", data, "-m", "fast", "stop"], capture_output=True)
+            shutil.rmtree(pg_folder, ignore_errors=True)
 
 
 if __name__ == "__main__":

@@ -25,6 +25,7 @@ store's retries (the page retries); the server never dies of a request.
 
 import re
 import secrets
+import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -146,7 +147,7 @@ def create_app(design: "Design", manifest: dict[str, Any], stimuli_folder: str |
         return Response(status_code=204)
 
     @app.get("/api/health")
-    def health() -> dict[str, Any]:
+    async def health() -> dict[str, Any]:  # async: answered on the event loop, no thread hop
         return {"study": study, "protocol": design.protocol, "stimuli": len(entries)}
 
     @app.get("/stimuli/{name}")
@@ -216,7 +217,8 @@ def create_app(design: "Design", manifest: dict[str, Any], stimuli_folder: str |
         return {"nr_shows": store.record_show(study, rec.participant, request.stimulus, request.nr_shows)}
 
     @app.post("/api/answer")
-    def answer(request: AnswerRequest) -> dict[str, Any]:
+    def answer(request: AnswerRequest, response: Response) -> dict[str, Any]:
+        start = time.perf_counter()
         rec = record(request.participant)
         if rec.consent_at is None:
             raise HTTPException(409, f"participant {rec.participant!r} has not given consent: POST /api/consent first")
@@ -246,7 +248,10 @@ def create_app(design: "Design", manifest: dict[str, Any], stimuli_folder: str |
             label_positions,
             request.nr_shows,
         )
-        return {"stored": stored, **status(rec)}
+        reply = {"stored": stored, **status(rec)}
+        # time spent in this handler (validation + commit + progress read), for load tests and monitoring
+        response.headers["Server-Timing"] = f"app;dur={(time.perf_counter() - start) * 1000:.2f}"
+        return reply
 
     return app
 

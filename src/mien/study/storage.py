@@ -13,9 +13,11 @@ nrShows) and ``answers`` (one row per rated question).
 
 from __future__ import annotations
 
+import contextlib
 import json
+import threading
 import time
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -205,9 +207,22 @@ class Store:
                 connect_args={"connect_timeout": max(1, round(busy_timeout_s))},
             )
         self._insert = insert
+        self._write_lock = threading.Lock() if self.is_sqlite else None
         self.engine = engine
         self._meta, self.tables = _schema()
         self._retry(lambda: self._meta.create_all(self.engine))
+
+    @contextlib.contextmanager
+    def _writing(self) -> Iterator[Any]:
+        """A write transaction. SQLite: one writer at a time in this process (a lock, so threads queue in
+        order instead of sleeping in SQLite's busy handler, which costs tens of ms per clash); other
+        processes are still waited for with the busy timeout."""
+        if self._write_lock is None:
+            with self.engine.begin() as connection:
+                yield connection
+            return
+        with self._write_lock, self.engine.begin() as connection:
+            yield connection
 
     def close(self) -> None:
         """Close every pooled connection."""
@@ -261,7 +276,7 @@ class Store:
         table = self.tables["stimuli"]
 
         def write() -> None:
-            with self.engine.begin() as connection:
+            with self._writing() as connection:
                 for row in rows:
                     statement = self._insert(table).values(**row)
                     update = {k: statement.excluded[k] for k in row if k not in ("study", "stimulus")}
@@ -286,7 +301,7 @@ class Store:
                 return existing
 
             def create() -> None:
-                with self.engine.begin() as connection:
+                with self._writing() as connection:
                     last = connection.execute(
                         sa.select(sa.func.max(table.c.ordinal)).where(table.c.study == study)
                     ).scalar_one()
@@ -314,7 +329,7 @@ class Store:
         table = self.tables["participants"]
 
         def write() -> None:
-            with self.engine.begin() as connection:
+            with self._writing() as connection:
                 connection.execute(
                     sa.update(table)
                     .where(table.c.study == study, table.c.participant == participant, table.c[column].is_(None))
@@ -338,7 +353,7 @@ class Store:
         table = self.tables["shows"]
 
         def write() -> int:
-            with self.engine.begin() as connection:
+            with self._writing() as connection:
                 statement = self._insert(table).values(
                     study=study, participant=participant, stimulus=stimulus, nr_shows=int(nr_shows)
                 )
@@ -393,7 +408,7 @@ class Store:
             return 0
 
         def write() -> int:
-            with self.engine.begin() as connection:
+            with self._writing() as connection:
                 # one multi-row INSERT; RETURNING counts the rows that were new on both dialects
                 statement = self._insert(table).values(rows).on_conflict_do_nothing().returning(table.c.question)
                 return len(connection.execute(statement).fetchall())
