@@ -85,7 +85,7 @@ def main() -> None:
         for i, target in enumerate(rig.targets):
             arrays[f"ids_{i}"] = target.vertex_ids
             arrays[f"deltas_{i}"] = target.deltas
-        np.savez(npz_path, **arrays)
+        np.savez(npz_path, **arrays)  # type: ignore[arg-type]
 
     glb_s, npz_s = interleaved(write_glb, write_npz, args.repeats)
     ratio = statistics.median(glb_s) / statistics.median(npz_s)

@@ -13,7 +13,7 @@ from mien.exchange import format_for, read_clip
 OPENFACE = "formats/OpenFace_Test.csv"
 
 
-def test_import_openface_then_export_everywhere(shared_data: Path, tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+def test_import_openface_then_export_everywhere(shared_data: Path, tmp_path: Path, capsys) -> None:
     clip_path = tmp_path / "of.npz"
     assert main(["import", str(shared_data / OPENFACE), str(clip_path)]) == 0
     assert "100 frames at 1000 fps (AU clip" in capsys.readouterr().out
@@ -45,7 +45,7 @@ def test_import_openface_then_export_everywhere(shared_data: Path, tmp_path: Pat
         (["render", "laughter", "--no-idle", "-o", "{tmp}/x.png"], "no --no-idle"),
     ],
 )
-def test_mistakes_exit_2_with_one_line(tmp_path: Path, capsys, argv: list[str], message: str) -> None:  # type: ignore[no-untyped-def]
+def test_mistakes_exit_2_with_one_line(tmp_path: Path, capsys, argv: list[str], message: str) -> None:
     clip = tmp_path / "clip.csv"
     clip.write_text("time_s,AU12L\n0,1\n0.1,2\n")
     (tmp_path / "bad.csv").write_text("time_s,AU12L\n0,1\n0.1,NaN\n")

@@ -36,7 +36,7 @@ def test_failed_write_keeps_the_old_file(tmp_path: Path, monkeypatch: pytest.Mon
     with pytest.raises(InvalidValueError, match="object array"):
         save_container(path, "mien-test", 1, {}, {"x": np.array([object()])})
 
-    def half_then_fail(stream, **arrays):  # type: ignore[no-untyped-def]
+    def half_then_fail(stream, **arrays):
         stream.write(b"PK\x03\x04 half a file")
         raise OSError(28, "No space left on device")
 

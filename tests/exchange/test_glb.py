@@ -8,6 +8,7 @@ import shutil
 import struct
 import subprocess
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -23,7 +24,7 @@ REPO = Path(__file__).resolve().parents[2]
 VALIDATOR_SCRIPT = Path(__file__).parent / "validate_gltf.mjs"
 
 
-def validate(*paths: Path) -> list[dict[str, object]]:
+def validate(*paths: Path) -> list[dict[str, Any]]:
     """Khronos gltf-validator reports (npm package in node_modules), one per file."""
     node = shutil.which("node")
     if node is None or not (REPO / "node_modules" / "gltf-validator").is_dir():
@@ -45,11 +46,11 @@ def weight_clip(n_frames: int = 30, fps: float = 30.0) -> Clip:
 
 
 @pytest.fixture(scope="module")
-def head():  # type: ignore[no-untyped-def]
+def head():
     return builtin_head()
 
 
-def test_head_and_animation_pass_the_khronos_validator(tmp_path: Path, head) -> None:  # type: ignore[no-untyped-def]
+def test_head_and_animation_pass_the_khronos_validator(tmp_path: Path, head) -> None:
     still = tmp_path / "head.glb"
     still.write_bytes(glb.head_glb_bytes(head))
     animated = glb.write(weight_clip(), tmp_path / "anim.glb", rig=head)
@@ -59,10 +60,10 @@ def test_head_and_animation_pass_the_khronos_validator(tmp_path: Path, head) -> 
     for report in reports:
         assert (report["errors"], report["warnings"]) == (0, 0), report["messages"]
     info = reports[1]["info"]
-    assert info["animationCount"] == 1 and info["hasMorphTargets"] is True  # type: ignore[index]
+    assert info["animationCount"] == 1 and info["hasMorphTargets"] is True
 
 
-def test_head_bytes_hold_named_sparse_targets(head) -> None:  # type: ignore[no-untyped-def]
+def test_head_bytes_hold_named_sparse_targets(head) -> None:
     data = glb.head_glb_bytes(head)
     assert glb.head_glb_bytes(head) is data  # cached per rig
     magic, version, total = struct.unpack_from("<III", data)
@@ -83,7 +84,7 @@ def test_head_bytes_hold_named_sparse_targets(head) -> None:  # type: ignore[no-
         np.testing.assert_array_equal(dense, target.dense(head.n_vertices))
 
 
-def test_round_trip_weights_and_head_rotation(tmp_path: Path, head) -> None:  # type: ignore[no-untyped-def]
+def test_round_trip_weights_and_head_rotation(tmp_path: Path, head) -> None:
     clip = weight_clip(45, 30.0)
     back = glb.read(glb.write(clip, tmp_path / "x.glb", rig=head))
     assert back.fps == 30.0 and back.n_frames == 45
@@ -96,14 +97,14 @@ def test_round_trip_weights_and_head_rotation(tmp_path: Path, head) -> None:  # 
     assert np.all(untouched == 0.0)
 
 
-def test_writes_into_a_binary_stream(head) -> None:  # type: ignore[no-untyped-def]
+def test_writes_into_a_binary_stream(head) -> None:
     buffer = io.BytesIO()
     glb.write(weight_clip(5), buffer, rig=head)
     buffer.seek(0)
     assert glb.read(buffer).n_frames == 5
 
 
-def test_bad_input_names_the_file(tmp_path: Path, head) -> None:  # type: ignore[no-untyped-def]
+def test_bad_input_names_the_file(tmp_path: Path, head) -> None:
     path = glb.write(weight_clip(10), tmp_path / "good.glb", rig=head)
     data = path.read_bytes()
     truncated = tmp_path / "truncated.glb"

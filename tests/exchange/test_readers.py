@@ -70,7 +70,7 @@ def test_golden_live_link_header_and_timecode() -> None:
 
 def test_live_link_written_by_mien_reads_back_by_column_name(tmp_path: Path) -> None:
     clip = tiny_weight_clip()
-    text = arkit_csv.write(clip, io.BytesIO()).getvalue().decode()  # type: ignore[attr-defined]
+    text = arkit_csv.write(clip, io.BytesIO()).getvalue().decode()
     # Reorder the columns: the reader finds them by name, not position.
     rows = [line.split(",") for line in text.splitlines()]
     order = [0, 1, *reversed(range(2, len(rows[0])))]

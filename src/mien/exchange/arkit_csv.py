@@ -31,7 +31,7 @@ import numpy as np
 
 from mien.errors import InvalidValueError
 from mien.exchange.csv_table import check_increasing, columns_from_text
-from mien.exchange.streams import Source, Target, read_text, refuse_rig, source_name, write_text
+from mien.exchange.streams import Source, TargetT, read_text, refuse_rig, source_name, write_text
 from mien.facs.catalogue import POSE_CHANNELS
 from mien.facs.clip import Clip
 from mien.rig.arkit import ARKIT_NAMES
@@ -170,7 +170,7 @@ def read(source: Source, timecode_fps: int | None = None) -> Clip:
     return Clip(np.stack(columns, axis=1), fps, tuple(channels))
 
 
-def write(clip: Clip, target: Target, rig: object = None) -> Target:
+def write(clip: Clip, target: TargetT, rig: object = None) -> TargetT:
     """Write ``clip`` as a Live Link Face CSV (see the module doc) to a path (atomically) or a binary stream.
 
     ``clip``: ARKit names (weights 0..1) and optional pose channels (degrees), or face channels, which go

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 
 from mien.errors import InvalidValueError
-from mien.exchange.streams import Source, Target, read_text, refuse_rig, source_name, write_text
+from mien.exchange.streams import Source, TargetT, read_text, refuse_rig, source_name, write_text
 from mien.facs.clip import Clip
 
 __all__ = ["SUFFIXES", "read", "write"]
@@ -14,7 +14,7 @@ SUFFIXES: tuple[str, ...] = (".json",)
 """File suffixes of this format."""
 
 
-def write(clip: Clip, target: Target, rig: object = None) -> Target:
+def write(clip: Clip, target: TargetT, rig: object = None) -> TargetT:
     """Write ``clip`` as JSON to ``target`` (a path, written atomically, or a binary stream)."""
     refuse_rig(rig, ".json")
     write_text(clip.to_json(), target)

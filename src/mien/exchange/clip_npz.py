@@ -12,7 +12,7 @@ import numpy as np
 
 from mien.errors import InvalidValueError
 from mien.exchange.container import load_container, save_container
-from mien.exchange.streams import Source, Target, refuse_rig, source_name
+from mien.exchange.streams import Source, TargetT, refuse_rig, source_name
 from mien.facs.clip import Clip
 
 __all__ = ["FORMAT_NAME", "FORMAT_VERSION", "SUFFIXES", "read", "write"]
@@ -27,7 +27,7 @@ FORMAT_VERSION = 1
 """The clip file version this module writes (and the newest it reads)."""
 
 
-def write(clip: Clip, target: Target, rig: object = None) -> Target:
+def write(clip: Clip, target: TargetT, rig: object = None) -> TargetT:
     """Write ``clip`` as a compressed ``.npz`` container to ``target`` (a path, written atomically, or a stream)."""
     refuse_rig(rig, ".npz")
     meta = {"fps": clip.fps, "channels": list(clip.channels)}

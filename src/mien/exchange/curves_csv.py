@@ -13,7 +13,7 @@ import io
 import numpy as np
 
 from mien.exchange.csv_table import check_increasing, read_columns
-from mien.exchange.streams import Source, Target, refuse_rig, write_text
+from mien.exchange.streams import Source, TargetT, refuse_rig, write_text
 from mien.facs.clip import Clip
 
 __all__ = ["SUFFIXES", "read", "sniff", "write"]
@@ -30,7 +30,7 @@ def sniff(head: str) -> bool:
     return head.lstrip().startswith("time_s")
 
 
-def write(clip: Clip, target: Target, rig: object = None) -> Target:
+def write(clip: Clip, target: TargetT, rig: object = None) -> TargetT:
     """Write ``clip`` as CSV (``time_s,<channel>,...``) to a path (atomically) or a binary stream."""
     refuse_rig(rig, ".csv")
     text = io.StringIO()

@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from mien.errors import InvalidValueError
-from mien.exchange.streams import Source, Target, read_bytes, source_name, write_bytes
+from mien.exchange.streams import Source, TargetT, read_bytes, source_name, write_bytes
 from mien.facs.catalogue import POSE_CHANNELS
 from mien.facs.clip import Clip
 from mien.rig.model import Rig
@@ -310,7 +310,7 @@ def head_glb_bytes(rig: Rig) -> bytes:
     return cached
 
 
-def write(clip: Clip, target: Target, rig: Rig | None = None) -> Target:
+def write(clip: Clip, target: TargetT, rig: Rig | None = None) -> TargetT:
     """Write ``rig`` (default: :func:`mien.rig.heads.load_head`) animated by ``clip`` as GLB to ``target``.
 
     ``clip``: face channels (AU intensities, pose degrees) or the rig's target names (weights 0..1) plus

@@ -32,7 +32,7 @@ import numpy as np
 
 from mien.errors import InvalidValueError
 from mien.exchange.key_reduction import default_tolerance, reduce_keys
-from mien.exchange.streams import Source, Target, read_bytes, refuse_rig, source_name, write_text
+from mien.exchange.streams import Source, TargetT, read_bytes, refuse_rig, source_name, write_text
 from mien.facs.clip import Clip
 
 __all__ = [
@@ -238,7 +238,7 @@ def _check_keys(name: str, times: np.ndarray, values: np.ndarray, frames: np.nda
 
 def write(
     curves: CurvesInput,
-    target: Target,
+    target: TargetT,
     rig: object = None,
     *,
     fps: float | None = None,
@@ -247,7 +247,7 @@ def write(
     reduce: bool = True,
     maya_version: str = "2020",
     start_frame: int = 0,
-) -> Target:
+) -> TargetT:
     """Write curves as a Maya ``.anim`` file to ``target`` (a path, written atomically, or a binary stream).
 
     ``curves``: a Clip (one curve per channel, time ``i / fps``) or a dict ``name -> (times_s, values)``.

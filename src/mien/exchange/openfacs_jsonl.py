@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from mien.errors import InvalidValueError
-from mien.exchange.streams import Source, Target, read_text, refuse_rig, source_name, write_text
+from mien.exchange.streams import Source, TargetT, read_text, refuse_rig, source_name, write_text
 from mien.facs.catalogue import FACE_AU_CODES, FACE_CHANNELS, OPENFACS_AUS, POSE_CHANNELS, au_channels
 from mien.facs.clip import Clip
 
@@ -52,7 +52,7 @@ def _face_values(clip: Clip) -> np.ndarray:
     return values
 
 
-def write(clip: Clip, target: Target, rig: object = None) -> Target:
+def write(clip: Clip, target: TargetT, rig: object = None) -> TargetT:
     """Write a face-channel ``clip`` as OpenFACS JSON lines to a path (atomically) or a binary stream."""
     refuse_rig(rig, ".jsonl")
     values = _face_values(clip)

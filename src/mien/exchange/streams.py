@@ -17,13 +17,14 @@ from __future__ import annotations
 import os
 import tempfile
 from pathlib import Path
-from typing import IO, Union
+from typing import IO, TypeVar, Union
 
 from mien.errors import InvalidValueError, MissingAssetError
 
 __all__ = [
     "Source",
     "Target",
+    "TargetT",
     "read_bytes",
     "read_text",
     "refuse_rig",
@@ -37,6 +38,9 @@ Source = Union[str, "os.PathLike[str]", IO[bytes]]
 
 Target = Union[str, "os.PathLike[str]", IO[bytes]]
 """A path or a writable binary stream."""
+
+TargetT = TypeVar("TargetT", bound=Target)
+"""A writer's target type: writers return the target they were given."""
 
 
 def source_name(source: Source | Target) -> str:
