@@ -7,6 +7,7 @@ camera preset the page starts with.
 
 from __future__ import annotations
 
+import contextlib
 import io
 import json
 import math
@@ -69,21 +70,15 @@ def _read_ports(process: subprocess.Popen[str], timeout_s: float) -> tuple[int, 
     return found["udp"], found["http"]
 
 
-@pytest.fixture(scope="module")
-def live() -> Iterator[Live]:
-    """``mien serve`` with two idle-free built-in heads on ephemeral ports."""
+@contextlib.contextmanager
+def _serve(*options: str) -> Iterator[Live]:
+    """``mien serve`` in a subprocess on ephemeral ports, with built-in heads and ``options``."""
     if three_dir() is None:
         pytest.skip("node_modules/three missing: run `npm ci`")
-    command = [sys.executable, "-m", "mien.cli", "serve", "--udp-port", "0", "--http-port", "0"]
-    command += ["--head", "builtin", "--no-idle"]
-    for character in (FIRST, SECOND, THIRD):
-        command += ["--character", character]
+    command = [sys.executable, "-m", "mien.cli", "serve", "--udp-port", "0", "--http-port", "0", "--head", "builtin"]
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
     process = subprocess.Popen(
-        command,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        text=True,
-        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+        [*command, *options], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env
     )
     try:
         udp_port, http_port = _read_ports(process, START_TIMEOUT_S)
@@ -95,6 +90,13 @@ def live() -> Iterator[Live]:
         except subprocess.TimeoutExpired:
             process.kill()
             process.wait(5)
+
+
+@pytest.fixture(scope="module")
+def live() -> Iterator[Live]:
+    """A server with three idle-free characters."""
+    with _serve("--no-idle", "--character", FIRST, "--character", SECOND, "--character", THIRD) as server:
+        yield server
 
 
 class Page:
@@ -350,3 +352,21 @@ def test_idle_switches_show_the_characters_setting(open_page: callable) -> None:
     page = open_page(FIRST).page
     flags = page.eval_on_selector_all("#idle-toggles input", "els => els.map(e => [e.dataset.idle, e.checked])")
     assert flags == [["blink", False], ["micro-motion", False], ["gaze", False]]  # started with --no-idle
+
+
+def test_a_token_server_needs_the_token_in_the_address(chromium: object) -> None:
+    token = "viewer-test-token"
+    with _serve("--token", token) as server:
+        page = Page(chromium, f"{server.url}/?token={token}")  # loads the head, streams frames
+        try:
+            assert page.page.locator("#status-connection").inner_text() == "live"
+            assert page.errors == []
+        finally:
+            page.close()
+        bare = chromium.new_page()  # type: ignore[attr-defined]
+        try:
+            bare.goto(f"{server.url}/")
+            bare.wait_for_function("document.getElementById('status-message').textContent.includes('401')")
+            assert "token" in bare.locator("#status-message").inner_text()
+        finally:
+            bare.close()
