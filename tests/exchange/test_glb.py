@@ -122,3 +122,17 @@ def test_bad_input_names_the_file(tmp_path: Path, head) -> None:
     with pytest.raises(InvalidValueError, match=r"clip channel.*smileFrown"):
         glb.write(Clip(np.zeros((3, 1)), 30.0, ("smileFrown",)), tmp_path / "bad.glb", rig=head)
     assert not (tmp_path / "bad.glb").exists()
+
+
+def test_ict_head_with_paint_texture_passes_the_validator(tmp_path: Path, ict_dir: Path) -> None:
+    from mien.rig.heads import load_head
+
+    rig = load_head("ict")
+    path = tmp_path / "ict.glb"
+    path.write_bytes(glb.head_glb_bytes(rig))
+    (report,) = validate(path)
+    assert (report["errors"], report["warnings"]) == (0, 0), report["messages"]
+    info = report["info"]
+    assert info["hasTextures"] is True and info["maxUVs"] == 1 and info["totalVertexCount"] == rig.n_vertices
+    image = next(r for r in info["resources"] if r["pointer"] == "/images/0")["image"]
+    assert image["format"] == "rgba" and image["transfer"] == "srgb"  # the PNG paint, sRGB-encoded

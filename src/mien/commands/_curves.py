@@ -27,7 +27,8 @@ def add_curve_options(parser: argparse.ArgumentParser, duration_s: float = 2.0) 
         "-o",
         "--output",
         type=output_file,
-        help="save the curves: .csv, .json, .npz (default: print active channels as CSV); missing folders are made",
+        help="save the curves: .csv, .json, .npz, .jsonl, .anim or .glb (docs/FORMATS.md; default: print active "
+        "channels as CSV); missing folders are made",
     )
     parser.add_argument("--plot", type=output_file, metavar="PNG", help="also save a plot of the curves")
 
