@@ -18,6 +18,7 @@ import subprocess
 import sys
 import threading
 import time
+import urllib.request
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -348,10 +349,17 @@ def test_au_slider_laughter_and_clip_drive_the_face(open_page: callable, tmp_pat
     assert page.errors == []
 
 
-def test_idle_switches_show_the_characters_setting(open_page: callable) -> None:  # type: ignore[valid-type]
-    page = open_page(FIRST).page
+def test_idle_switches_show_the_characters_setting(open_page: callable, live: Live) -> None:  # type: ignore[valid-type]
+    page = open_page(THIRD).page
     flags = page.eval_on_selector_all("#idle-toggles input", "els => els.map(e => [e.dataset.idle, e.checked])")
     assert flags == [["blink", False], ["micro-motion", False], ["gaze", False]]  # started with --no-idle
+    page.click("#idle-toggles input[data-idle=blink]")  # the {"idle": {...}} command over the socket
+    page.wait_for_timeout(1500)
+    with urllib.request.urlopen(f"{live.url}/api/characters") as response:
+        idle = {c["id"]: c["idle"] for c in json.load(response)}[THIRD]
+    # Either the server switched idle on, or the page says it cannot (servers without the idle command).
+    assert idle or "cannot switch idle live" in page.locator("#status-message").inner_text()
+    page.click("#idle-toggles input[data-idle=blink]")
 
 
 def test_a_token_server_needs_the_token_in_the_address(chromium: object) -> None:

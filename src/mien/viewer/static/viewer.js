@@ -489,10 +489,23 @@ function buildLaughter(types) {
 function buildIdle(toggles) {
   const box = $("idle-toggles");
   const inputs = [];
-  const sendIdle = () => {
+  const sendIdle = async () => {
     const settings = {};
     for (const { input, flags } of inputs) for (const flag of flags) settings[flag] = input.checked;
     send({ idle: settings });
+    // The server reports idle per character; say so when it did not take the switch (older servers).
+    const id = state.character;
+    await new Promise((resolve) => setTimeout(resolve, 400));
+    try {
+      const info = await api("GET", "/api/characters");
+      const entry = (Array.isArray(info) ? info : []).find((e) => String(characterId(e)) === id);
+      const wanted = Object.values(settings).some(Boolean);
+      if (entry && typeof entry.idle === "boolean" && entry.idle !== wanted) {
+        setStatus(`this server cannot switch idle live: ${id} keeps idle ${entry.idle ? "on" : "off"} (mien serve --no-idle)`);
+      }
+    } catch (error) {
+      setStatus(error.message);
+    }
   };
   for (const toggle of toggles) {
     const label = document.createElement("label");
