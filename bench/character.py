@@ -3,6 +3,10 @@
 Targets (issue 2): one character's step (FACS + emotions + idle) <= 20 us median; 1,000 characters as a
 batch <= 2 ms median on one core and >= 20x faster than a Python loop over 1,000 single characters, both
 measured here in the same run. Run: ``python bench/character.py``.
+
+Since issue 8 a single :class:`Character` is a :class:`CharacterBatch` of one (one implementation, so the two
+cannot drift): its step pays numpy's per-call overhead on one row, and the 20 us target of issue 2 is traded
+for that (see ``bench/engine_tick.py`` for the server tick, the cost that matters live).
 """
 
 from __future__ import annotations
