@@ -17,12 +17,15 @@ import socket
 import threading
 import time
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from mien.errors import InvalidValueError
 from mien.server.registry import CharacterSpec, Registry
 from mien.server.scheduler import Clock
 from mien.server.websocket import Hub
+
+if TYPE_CHECKING:
+    from mien.server.udp import OpenFacsEndpoint
 
 __all__ = ["LiveServer", "ServeConfig", "ServerThread", "is_loopback", "serve"]
 
@@ -96,7 +99,7 @@ class LiveServer:
         self.started_monotonic = time.monotonic()
         """``time.monotonic()`` at start."""
         self._tasks: list[asyncio.Task[Any]] = []
-        self._udp: asyncio.DatagramTransport | None = None
+        self._udp: OpenFacsEndpoint | None = None
         self._uvicorn: Any = None
 
     async def start(self) -> None:
@@ -145,6 +148,7 @@ class LiveServer:
             self._uvicorn.should_exit = True
         if self._udp is not None:
             self._udp.close()
+            self._udp = None
         if self._tasks:
             with contextlib.suppress(asyncio.TimeoutError):
                 await asyncio.wait_for(asyncio.shield(self._tasks[1]), 5.0)
