@@ -80,3 +80,30 @@ def test_bad_input_is_rejected_without_changing_state():
         engine.advance(0.5)
     with pytest.raises(InvalidValueError, match="t_s"):
         engine.advance(float("nan"))
+
+
+def test_batch_rows_are_independent_and_equal_the_single_engine():
+    from mien.facs.dynamics import FacsBatch
+
+    batch = FacsBatch(3)
+    single = FacsEngine()
+    batch.set_many(slice(None), {"AU4": 2.0})
+    single.set_many({"AU4": 2.0})
+    batch.set_speed(1, 0.1, au="AU12")
+    single.set_speed(0.1, au="AU12")
+    batch.set(1, "AU12", 4.0)
+    single.set("AU12", 4.0)
+    batch.play([1, 2], "AU6", 3.0, start_s=0.1, onset_s=0.2, apex_s=0.1, offset_s=0.2)
+    single.play("AU6", 3.0, start_s=0.1, onset_s=0.2, apex_s=0.1, offset_s=0.2)
+    assert len(batch.actions(1)) == 1 and batch.actions(0) == []
+    for i in range(1, 61):
+        frames = batch.advance(i / 60)
+        np.testing.assert_allclose(frames[1], single.advance(i / 60), atol=1e-12)
+    assert frames[0, AU12L] == 0.0 and frames[2, AU12L] == 0.0
+    assert frames[1, AU12L] == pytest.approx(4.0 * (1 - 0.9**60), abs=1e-9)  # Speed 0.1 per 60 Hz tick
+    assert single.actions == [] and batch.actions(2) == []
+    batch.add_rows(1)
+    batch.reset_rows(np.array([1]))
+    frames = batch.advance(1.5)
+    assert frames.shape == (4, len(FACE_CHANNELS)) and not frames[1].any() and not frames[3].any()
+    assert frames[0, AU4R] == pytest.approx(2.0, abs=1e-4)
