@@ -274,6 +274,10 @@ def test_output_folders_are_created(inputs: Path, capsys: pytest.CaptureFixture[
         assert main(argv) == 0, capsys.readouterr().err
     for path in ("a/b/joy.csv", "p/q/joy.png", "c/d/au.json", "e/f/laugh.npz"):
         assert (inputs / path).stat().st_size > 0, path
+    # A usage error anywhere on the line makes no folder at all.
+    assert main(["emote", "joy", "-o", f"{inputs}/never/joy.csv", "--fps", "0"]) == 2
+    assert main(["demo", "-o", f"{inputs}/never2", "--fps", "-1"]) == 2
+    assert not (inputs / "never").exists() and not (inputs / "never2").exists()
 
 
 def test_the_request_limit_can_be_raised(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:

@@ -11,6 +11,7 @@ from typing import NoReturn
 
 from mien import __version__
 from mien.commands import COMMAND_MODULES
+from mien.commands._checks import PENDING_OUTPUTS, prepare_outputs
 from mien.errors import MienError
 
 __all__ = ["UsageError", "build_parser", "main"]
@@ -59,15 +60,18 @@ def _one_line(message: object) -> str:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run ``mien`` with ``argv`` (default: ``sys.argv[1:]``) and return the exit code."""
     parser = build_parser()
+    PENDING_OUTPUTS.clear()
     try:
         args = parser.parse_args(argv)
     except UsageError as exc:
+        PENDING_OUTPUTS.clear()
         print(f"{exc.prog}: error: {_one_line(exc)} (see {exc.prog} --help)", file=sys.stderr)
         return 2
     if getattr(args, "handler", None) is None:
         parser.print_help()
         return 0
     try:
+        prepare_outputs()  # the missing output folders, made once every argument is known to be good
         return int(args.handler(args) or 0)
     except MienError as exc:
         print(f"mien {args.command}: error: {_one_line(exc)}", file=sys.stderr)

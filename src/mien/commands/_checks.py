@@ -7,9 +7,9 @@ says what to do. The rules, the same in every command:
   onsets, holds and start times are finite and >= 0 (:func:`non_negative_seconds`).
 * **Input files** must exist and not be empty; a typo gets a "did you mean" from the folder's own files
   (:func:`input_file`, :func:`input_folder`).
-* **Output paths**: missing output folders are **created**, in every command. A destination that is an
-  existing folder where a file is needed, that lies under a file, or that cannot be written is refused
-  (:func:`output_file`, :func:`output_folder`).
+* **Output paths**: missing output folders are **created**, in every command, once all arguments have
+  parsed (:func:`prepare_outputs`). A destination that is an existing folder where a file is needed, that
+  lies under a file, or that cannot be written is refused (:func:`output_file`, :func:`output_folder`).
 * **Request size**: a request that would hold more than :data:`DEFAULT_REQUEST_LIMIT_BYTES` (2 GiB) of
   samples or frames in memory is refused naming the limit; ``MIEN_MAX_REQUEST_BYTES`` (bytes, or with a
   unit: ``8GiB``, ``500MB``) raises or lowers it (:func:`check_request_size`).
@@ -37,6 +37,7 @@ from mien.errors import InvalidValueError
 
 __all__ = [
     "DEFAULT_REQUEST_LIMIT_BYTES",
+    "PENDING_OUTPUTS",
     "REQUEST_LIMIT_ENV",
     "check_curve_request",
     "check_request_size",
@@ -52,6 +53,7 @@ __all__ = [
     "parse_bytes",
     "positive_fps",
     "positive_seconds",
+    "prepare_outputs",
     "refuse_option",
     "request_limit_bytes",
 ]
@@ -170,22 +172,35 @@ def input_folder(text: str) -> Path:
 # ------------------------------------------------------------------------------------------------ outputs
 
 
-def _writable_folder(folder: Path, shown: str) -> None:
-    """Create ``folder`` (and its parents) and prove it takes a file; raise ArgumentTypeError if not."""
+PENDING_OUTPUTS: list[tuple[Path, str]] = []
+"""Output folders named by the arguments parsed so far, with the text the user gave: created (and proved
+writable) by :func:`prepare_outputs` once every argument has parsed, so a usage error leaves no folder behind."""
+
+
+def _check_folder_can_be_made(folder: Path, shown: str) -> None:
+    """Refuse a folder under a regular file; note the folder for :func:`prepare_outputs`."""
     existing = folder
-    while not existing.exists():
+    while not existing.exists() and existing != existing.parent:
         existing = existing.parent
     if not existing.is_dir():
         raise argparse.ArgumentTypeError(f"{shown}: {existing} is a file, so no folder can be made under it")
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryFile(dir=folder, prefix=".mien-write-test-"):
-            pass
-    except OSError as exc:
-        reason = exc.strerror or str(exc)
-        raise argparse.ArgumentTypeError(
-            f"{shown}: cannot write in {folder} ({reason}); choose another place"
-        ) from None
+    PENDING_OUTPUTS.append((folder, shown))
+
+
+def prepare_outputs() -> None:
+    """Create the output folders the parsed arguments name and prove each takes a file (``mien.cli`` calls this
+    after parsing). Raises :class:`InvalidValueError` naming the path when one cannot be made or written."""
+    while PENDING_OUTPUTS:
+        folder, shown = PENDING_OUTPUTS.pop(0)
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+            with tempfile.TemporaryFile(dir=folder, prefix=".mien-write-test-"):
+                pass
+        except OSError as exc:
+            reason = exc.strerror or str(exc)
+            raise InvalidValueError(
+                "output", shown, f"a place that can be written: cannot write in {folder} ({reason}); choose another"
+            ) from None
 
 
 def output_file(text: str) -> Path:
@@ -195,7 +210,7 @@ def output_file(text: str) -> Path:
         raise argparse.ArgumentTypeError(f"{text!r} names a folder: give a file name")
     if path.is_dir():
         raise argparse.ArgumentTypeError(f"{text} is an existing folder: give a file name inside it")
-    _writable_folder(path.parent if str(path.parent) else Path("."), text)
+    _check_folder_can_be_made(path.parent, text)
     if path.exists() and not os.access(path, os.W_OK):
         raise argparse.ArgumentTypeError(f"{text} is read-only: choose another file")
     return path
@@ -206,7 +221,7 @@ def output_folder(text: str) -> Path:
     path = Path(text).expanduser()
     if path.exists() and not path.is_dir():
         raise argparse.ArgumentTypeError(f"{text} is a file: give a folder")
-    _writable_folder(path, text)
+    _check_folder_can_be_made(path, text)
     return path
 
 
