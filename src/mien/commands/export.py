@@ -3,12 +3,8 @@
 from __future__ import annotations
 
 import argparse
-from typing import TYPE_CHECKING
 
 from mien.commands._checks import input_file, output_file, positive_fps
-
-if TYPE_CHECKING:
-    from mien.facs.clip import Clip
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -28,20 +24,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--format", help="output format when several share a suffix (arkit_csv for .csv)")
     parser.add_argument("--input-format", help="input format when its suffix and header do not tell")
     parser.set_defaults(handler=run)
-
-
-def resample(clip: Clip, fps: float) -> Clip:
-    """``clip`` linearly resampled to ``fps`` over the same time span (first to last frame)."""
-    import math
-
-    import numpy as np
-
-    from mien.facs.clip import Clip
-
-    if clip.n_frames < 2 or fps == clip.fps:
-        return clip
-    n_frames = math.floor((clip.n_frames - 1) / clip.fps * fps + 1e-9) + 1
-    return Clip(clip.sample(np.arange(n_frames) / fps), fps, clip.channels)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -64,6 +46,8 @@ def run(args: argparse.Namespace) -> int:
 
             raise InvalidValueError(str(args.input), "no frames", "a clip with at least one frame")
         if args.fps is not None:
+            from mien.exchange.timing import resample
+
             clip = resample(clip, args.fps)
         write = format_module(output_format).write
         if carries_head:

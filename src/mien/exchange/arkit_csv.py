@@ -32,6 +32,7 @@ import numpy as np
 from mien.errors import InvalidValueError
 from mien.exchange.csv_table import check_increasing, columns_from_text
 from mien.exchange.streams import Source, TargetT, read_text, refuse_rig, source_name, write_text
+from mien.exchange.timing import uniform_clip
 from mien.facs.catalogue import POSE_CHANNELS
 from mien.facs.clip import Clip
 from mien.rig.arkit import ARKIT_NAMES
@@ -154,20 +155,17 @@ def read(source: Source, timecode_fps: int | None = None) -> Clip:
         bad = np.flatnonzero((weights < -1e-6) | (weights > 1.0 + 1e-6))
         if bad.size:
             raise InvalidValueError(table.where(int(bad[0]), column), float(weights[bad[0]]), "a weight in 0..1")
-    fps = 30.0 if len(times) < 2 else round((len(times) - 1) / float(times[-1] - times[0]), 3)
-    grid = times[0] + np.arange(len(times)) / fps
-    columns = [np.interp(grid, times, table.values[c]) for c in COLUMNS[:52]]
+    columns = [table.values[c] for c in COLUMNS[:52]]
     channels = list(ARKIT_NAMES)
     if {"HeadYaw", "HeadPitch", "HeadRoll"} <= set(rotations):
-        columns += [np.degrees(np.interp(grid, times, table.values[c])) for c in ("HeadYaw", "HeadPitch", "HeadRoll")]
+        columns += [np.degrees(table.values[c]) for c in ("HeadYaw", "HeadPitch", "HeadRoll")]
         channels += list(POSE_CHANNELS[:3])
     eyes = ("LeftEyeYaw", "RightEyeYaw", "LeftEyePitch", "RightEyePitch")
     if set(eyes) <= set(rotations):
         for left, right in (eyes[:2], eyes[2:]):
-            mean = 0.5 * (table.values[left] + table.values[right])
-            columns.append(np.degrees(np.interp(grid, times, mean)))
+            columns.append(np.degrees(0.5 * (table.values[left] + table.values[right])))
         channels += list(POSE_CHANNELS[3:])
-    return Clip(np.stack(columns, axis=1), fps, tuple(channels))
+    return uniform_clip(times, np.stack(columns, axis=1), channels)
 
 
 def write(clip: Clip, target: TargetT, rig: object = None) -> TargetT:

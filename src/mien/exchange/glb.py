@@ -27,7 +27,6 @@ pose channels when the file rotates a node, resampled to a uniform frame rate es
 from __future__ import annotations
 
 import json
-import math
 import struct
 import weakref
 import zlib
@@ -37,6 +36,7 @@ import numpy as np
 
 from mien.errors import InvalidValueError
 from mien.exchange.streams import Source, TargetT, read_bytes, source_name, write_bytes
+from mien.exchange.timing import uniform_clip
 from mien.facs.catalogue import POSE_CHANNELS
 from mien.facs.clip import Clip
 from mien.rig.model import Rig
@@ -441,13 +441,10 @@ def read(source: Source) -> Clip:
     if len(times) > 1 and np.any(np.diff(times) <= 0):
         index = int(np.argmax(np.diff(times) <= 0)) + 1
         raise InvalidValueError(f"{name} key time {index}", float(times[index]), "increasing key times")
-    fps = 30.0 if len(times) < 2 else (len(times) - 1) / float(times[-1] - times[0])
-    fps = round(fps, 3) if math.isclose(fps, round(fps, 3), rel_tol=1e-5) else fps
-    grid = times[0] + np.arange(len(times)) / fps
-    columns = [np.interp(grid, times, weights[:, j]) for j in range(n_targets)]
+    columns = [weights[:, j] for j in range(n_targets)]
     channel_names = list(names)
     if "rotation" in tracks:
         rotation_times, angles = tracks["rotation"]
-        columns += [np.interp(grid, rotation_times, angles[:, j]) for j in range(3)]
+        columns += [np.interp(times, rotation_times, angles[:, j]) for j in range(3)]
         channel_names += list(POSE_CHANNELS[:3])
-    return Clip(np.stack(columns, axis=1), fps, tuple(channel_names))
+    return uniform_clip(times, np.stack(columns, axis=1), channel_names)

@@ -33,6 +33,7 @@ import numpy as np
 from mien.errors import InvalidValueError
 from mien.exchange.key_reduction import default_tolerance, reduce_keys
 from mien.exchange.streams import Source, TargetT, read_bytes, refuse_rig, source_name, write_text
+from mien.exchange.timing import resample
 from mien.facs.clip import Clip
 
 __all__ = [
@@ -194,9 +195,7 @@ def _curves(curves: CurvesInput, fps: float | None) -> tuple[dict[str, tuple[np.
         note = ""
         clip = curves
         if rate != curves.fps and curves.n_frames:
-            n_frames = math.ceil((curves.n_frames - 1) / curves.fps * rate - 1e-9) + 1  # covers the last frame
-            times = np.arange(n_frames) / rate
-            clip = Clip(curves.sample(times), rate, curves.channels)
+            clip = resample(curves, rate, cover_end=True)
             why = f"Maya has no {wanted:g} fps time unit" if rate != wanted else "as asked"
             note = f"// resampled from {curves.fps:g} fps to {rate:g} fps ({why})\n"
         times = clip.times_s

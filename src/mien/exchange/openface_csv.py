@@ -29,6 +29,7 @@ import numpy as np
 from mien.errors import InvalidValueError
 from mien.exchange.csv_table import check_increasing, columns_from_text
 from mien.exchange.streams import Source, read_text, source_name
+from mien.exchange.timing import uniform_clip
 from mien.facs.catalogue import FACE_AU_CODES, FACE_CHANNELS, au_channels
 from mien.facs.clip import Clip
 
@@ -111,15 +112,14 @@ def read(source: Source) -> Clip:
     tracked = table.values["success"] > 0.5 if "success" in table.values else np.ones(n_rows, bool)
     if not tracked.any():
         raise InvalidValueError(f"{name} success", "0 in every row", "at least one row where OpenFace found a face")
-    if not tracked.all():
-        lost = np.flatnonzero(~tracked)
+    lost = ~tracked
+    if lost.any():
+        first = table.lines[int(np.argmax(lost))]
         warnings.warn(
-            f"{name}: {lost.size} of {n_rows} rows without a face (success 0, first at line {table.lines[lost[0]]}) "
+            f"{name}: {int(lost.sum())} of {n_rows} rows without a face (success 0, first at line {first}) "
             "filled from the nearest tracked rows",
             stacklevel=2,
         )
-    fps = 30.0 if n_rows < 2 else round((n_rows - 1) / float(times[-1] - times[0]), 3)
-    grid = times[0] + np.arange(n_rows) / fps
-    known_t = times[tracked]
-    resampled = np.stack([np.interp(grid, known_t, values[tracked, j]) for j in range(values.shape[1])], axis=1)
-    return Clip(resampled, fps, FACE_CHANNELS)
+    for j in range(values.shape[1]):  # untracked rows (zeros in the file) take the tracked rows around them
+        values[lost, j] = np.interp(times[lost], times[tracked], values[tracked, j])
+    return uniform_clip(times, values, FACE_CHANNELS)

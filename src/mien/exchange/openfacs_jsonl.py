@@ -28,6 +28,7 @@ import numpy as np
 
 from mien.errors import InvalidValueError
 from mien.exchange.streams import Source, TargetT, read_text, refuse_rig, source_name, write_text
+from mien.exchange.timing import uniform_clip
 from mien.facs.catalogue import FACE_AU_CODES, FACE_CHANNELS, OPENFACS_AUS, POSE_CHANNELS, au_channels
 from mien.facs.clip import Clip
 
@@ -128,9 +129,4 @@ def read(source: Source) -> Clip:
         warnings.warn(f"{name}: skipped unknown keys {shown}", stacklevel=2)
     if not rows:
         raise InvalidValueError(name, "no states", "at least one JSON line")
-    t = np.asarray(times)
-    values = np.stack(rows)
-    fps = 30.0 if len(t) < 2 else round((len(t) - 1) / float(t[-1] - t[0]), 3)
-    grid = t[0] + np.arange(len(t)) / fps
-    resampled = np.stack([np.interp(grid, t, values[:, j]) for j in range(values.shape[1])], axis=1)
-    return Clip(resampled, fps, FACE_CHANNELS)
+    return uniform_clip(np.asarray(times), np.stack(rows), FACE_CHANNELS)
