@@ -136,3 +136,10 @@ def test_ict_head_with_paint_texture_passes_the_validator(tmp_path: Path, ict_di
     assert info["hasTextures"] is True and info["maxUVs"] == 1 and info["totalVertexCount"] == rig.n_vertices
     image = next(r for r in info["resources"] if r["pointer"] == "/images/0")["image"]
     assert image["format"] == "rgba" and image["transfer"] == "srgb"  # the PNG paint, sRGB-encoded
+
+
+def test_another_heads_extra_targets_are_skipped_with_a_warning(tmp_path: Path, head) -> None:
+    clip = Clip(np.array([[0.0, 0.2], [0.5, 0.4]]), 30.0, ("jawOpen", "someOtherHeadTarget"))
+    with pytest.warns(UserWarning, match="not on head 'builtin' skipped: someOtherHeadTarget"):
+        back = glb.read(glb.write(clip, tmp_path / "x.glb", rig=head))
+    np.testing.assert_allclose(back.channel("jawOpen"), [0.0, 0.5], atol=1e-6)

@@ -9,6 +9,8 @@ optional pose channels, used as they are. The way back, ARKit weights -> AU inte
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from mien.errors import InvalidValueError
@@ -21,24 +23,29 @@ __all__ = ["clip_to_rig", "is_weight_clip", "weights_to_au"]
 
 
 def is_weight_clip(clip: Clip, target_names: tuple[str, ...]) -> bool:
-    """True when every channel of ``clip`` is a target name or a pose channel (and at least one is a target)."""
+    """True when ``clip`` names some of ``target_names`` and no AU channel (pose channels may be there too)."""
     names = set(target_names)
-    return any(c in names for c in clip.channels) and all(c in names or c in POSE_CHANNELS for c in clip.channels)
+    aus = set(FACE_CHANNELS) - set(POSE_CHANNELS)
+    return any(c in names for c in clip.channels) and not any(c in aus for c in clip.channels)
 
 
 def clip_to_rig(clip: Clip, rig: Rig) -> tuple[np.ndarray, np.ndarray]:
     """``(weights (n, n_targets) float32, poses (n, 5) float64 degrees)`` of ``clip`` on ``rig``.
 
-    Weight clips (channels named after ``rig``'s targets) are used as they are; face-channel clips go through
-    the AU mapping; anything else raises naming the first channel that is neither.
+    Weight clips (channels named after ``rig``'s targets) are used as they are; channels naming targets this
+    head lacks (another head's extras) are skipped with a warning. Face-channel clips go through the AU mapping;
+    anything else raises naming the first channel that is neither.
     """
     if is_weight_clip(clip, rig.target_names):
+        skipped = [c for c in clip.channels if c not in rig.target_names and c not in POSE_CHANNELS]
+        if skipped:
+            warnings.warn(f"targets not on head {rig.name!r} skipped: {', '.join(skipped)}", stacklevel=2)
         weights = np.zeros((clip.n_frames, len(rig.targets)), np.float32)
         poses = np.zeros((clip.n_frames, len(POSE_CHANNELS)))
         for j, name in enumerate(clip.channels):
             if name in POSE_CHANNELS:
                 poses[:, POSE_CHANNELS.index(name)] = clip.values[:, j]
-            else:
+            elif name not in skipped:
                 weights[:, rig.target_index(name)] = clip.values[:, j]
         return weights, poses
     unknown = [c for c in clip.channels if c not in FACE_CHANNELS]
