@@ -72,7 +72,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
     try:
         prepare_outputs()  # the missing output folders, made once every argument is known to be good
-        return int(args.handler(args) or 0)
+        code = int(args.handler(args) or 0)
+        sys.stdout.flush()  # a reader that went away is met here, not in the interpreter's last flush
+        return code
     except MienError as exc:
         print(f"mien {args.command}: error: {_one_line(exc)}", file=sys.stderr)
         return 2
