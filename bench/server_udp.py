@@ -20,10 +20,10 @@ import orjson
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _live_server import health, live_server  # noqa: E402
+from _live_server import health, live_server
 
-from mien.client import openfacs_message  # noqa: E402
-from mien.server.protocol import parse_message  # noqa: E402
+from mien.client import openfacs_message
+from mien.server.protocol import parse_message
 
 N_DATAGRAMS = 60_000
 RATES = (20_000, 30_000)

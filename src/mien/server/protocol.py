@@ -167,6 +167,15 @@ class Message:
     watch: str | None = None
     """WebSocket: switch the stream to this character id."""
 
+    @classmethod
+    def state(cls, aus: tuple[tuple[str, float], ...], speed: float | None) -> Message:
+        """A plain state message, built without the dataclass ``__init__`` (the UDP hot path: the other fields
+        keep their class-level defaults)."""
+        message = object.__new__(cls)
+        object.__setattr__(message, "aus", aus)
+        object.__setattr__(message, "speed", speed)
+        return message
+
     @property
     def has_events(self) -> bool:
         """True when the message carries a one-off event (emotion, laugh, PAD, play) that must not be merged."""
@@ -243,6 +252,17 @@ def _character(key: str, value: Any) -> str:
     return name
 
 
+_JSON: tuple[Any, type[Exception]] | None = None
+
+
+def _json() -> tuple[Any, type[Exception]]:
+    global _JSON
+    import orjson  # the serve extra; imported on first use so the client needs only the standard library
+
+    _JSON = (orjson.loads, orjson.JSONDecodeError)
+    return _JSON
+
+
 def parse_message(data: bytes | str, max_bytes: int = MAX_MESSAGE_BYTES) -> Message:
     """Parse one message (a datagram's bytes or a WebSocket text) into a :class:`Message`.
 
@@ -256,25 +276,26 @@ def parse_message(data: bytes | str, max_bytes: int = MAX_MESSAGE_BYTES) -> Mess
     ...
     mien.server.protocol.MessageRejected: wrong_type: AU4='x' is not a number
     """
-    import orjson
-
     if len(data) > max_bytes:
         raise MessageRejected(Rejection.OVERSIZED, f"{len(data)} bytes > {max_bytes}")
+    loads, decode_error = _JSON or _json()
     try:
-        obj = orjson.loads(data)
-    except orjson.JSONDecodeError as exc:
+        obj = loads(data)
+    except decode_error as exc:
         raise MessageRejected(Rejection.MALFORMED_JSON, str(exc)[:200]) from None
     if not isinstance(obj, dict):
         raise MessageRejected(Rejection.NOT_OBJECT, f"expected a JSON object, got {type(obj).__name__}")
-    if obj.keys() <= _OPENFACS_FAST_KEYS:  # the common OpenFACS message, checked in bulk
+    if obj.keys() <= _OPENFACS_FAST_KEYS and b"true" not in data and b"false" not in data:
+        # the common OpenFACS message, checked in bulk: min/max raise TypeError on strings, null, lists and
+        # objects; booleans were ruled out on the raw bytes (AU keys never contain those words)
         speed = obj.pop("Speed", None)
         values = obj.values()
-        if (
-            (speed is None or (type(speed) in _NUMBER_TYPES and 0.0 <= speed <= 1.0))
-            and all(type(value) in _NUMBER_TYPES for value in values)
-            and (not obj or (min(values) >= 0.0 and max(values) <= 5.0))
-        ):
-            return Message(aus=tuple(obj.items()), speed=speed)
+        try:
+            ok = not obj or (min(values) >= 0.0 and max(values) <= 5.0)
+        except TypeError:
+            ok = False
+        if ok and (speed is None or (type(speed) in _NUMBER_TYPES and 0.0 <= speed <= 1.0)):
+            return Message.state(tuple(obj.items()), speed)
         if speed is not None:
             obj["Speed"] = speed  # let the full check below name the bad value
     aus: list[tuple[str, float]] = []
