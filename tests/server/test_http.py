@@ -172,3 +172,26 @@ def test_pad_and_feature_point_characters(live, wait_until) -> None:
     )
     assert state["aus"]["AU12L"] == 0.0  # the feature-point basis leaves the AU channels alone
     assert httpx.get(f"{base}/api/characters/b").json()["aus"]["AU12L"] == 0.0
+
+
+def test_idle_switches(live, wait_until) -> None:
+    base = live.base_url
+    info = lambda: {c["id"]: c for c in httpx.get(f"{base}/api/characters").json()}  # noqa: E731
+    assert info()["a"]["idle"] is False
+    assert httpx.post(f"{base}/api/characters/a/idle", json={"blink": True}).status_code == 202
+    parts = wait_until(lambda: info()["a"]["idle"] and info()["a"]["idle_parts"], what="blink on")
+    assert parts["blink"] is True and parts["gaze"] is False
+    # a blink closes the eyes within the first blink interval (Normal(6 s, 2 s) is long; the server time moves on)
+    assert httpx.post(f"{base}/api/characters/a/idle", json={"on": True}).status_code == 202
+    wait_until(lambda: all(info()["a"]["idle_parts"].values()), what="all idle on")
+    wait_until(
+        lambda: (
+            abs(httpx.get(f"{base}/api/characters/a").json()["pose_deg"]["gaze_yaw_deg"]) > 0.01
+            or httpx.get(f"{base}/api/characters/a").json()["aus"]["AU12L"] > 0.0
+        ),
+        timeout_s=5.0,
+        what="idle motion",
+    )
+    assert httpx.post(f"{base}/api/characters/a/idle", json={"on": False}).status_code == 202
+    wait_until(lambda: info()["a"]["idle"] is False, what="idle off")
+    assert info()["b"]["idle"] is False

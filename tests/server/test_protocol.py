@@ -52,6 +52,10 @@ def test_extensions() -> None:
     assert message.emotion == "happy" and message.intensity == 1.2 and message.laugh == "laughter"
     assert message.pad == (0.5, -0.2, 0.1) and message.character == "alice" and message.has_events
     assert message.play is not None and message.play.au == "AU45" and message.play.onset_s == 0.1
+    assert parse_message(b'{"idle": {"blink": false, "gaze": true}}').idle == (("blink", False), ("gaze", True))
+    assert dict(parse_message(b'{"idle": false}').idle or ()) == dict.fromkeys(
+        ("blink", "mouth", "eyelids", "neck", "gaze", "wobble"), False
+    )
     assert parse_message(b'{"emotion": "joy"}').aus is None  # events alone leave the held AUs alone
     assert parse_message(b"{}") == Message(aus=())  # an empty OpenFACS state: every AU to 0
 
@@ -80,6 +84,9 @@ def test_extensions() -> None:
         (b'{"emotion": "bliss"}', Rejection.UNKNOWN_NAME),
         (b'{"laugh": "guffaw"}', Rejection.UNKNOWN_NAME),
         (b'{"play": {"au": "AU12", "when": 1}}', Rejection.UNKNOWN_FIELD),
+        (b'{"idle": {"sneeze": true}}', Rejection.UNKNOWN_FIELD),
+        (b'{"idle": {"blink": 1}}', Rejection.WRONG_TYPE),
+        (b'{"idle": "off"}', Rejection.WRONG_TYPE),
         (b" " * (MAX_MESSAGE_BYTES + 1), Rejection.OVERSIZED),
     ],
 )

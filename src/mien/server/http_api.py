@@ -15,7 +15,7 @@ from fastapi.responses import JSONResponse
 from pydantic import BaseModel, Field
 
 from mien.errors import MienError, UnknownNameError
-from mien.server.protocol import MessageRejected, frame_bytes, parse_message
+from mien.server.protocol import MessageRejected, frame_bytes, idle_parts, parse_message
 from mien.server.registry import CharacterSpec, Entry
 
 if TYPE_CHECKING:
@@ -69,7 +69,8 @@ class CharacterInfo(BaseModel):
     head: str
     identity: str | None
     seed: int
-    idle: bool
+    idle: bool = Field(description="Any idle behaviour on")
+    idle_parts: dict[str, bool] = Field(description="Each idle switch")
     expression_basis: str
     target_names: list[str] = Field(description="Morph targets, in frame weight order")
     frame_bytes: int = Field(description="Bytes of one WebSocket frame of this character")
@@ -117,6 +118,19 @@ class LaughterCommand(BaseModel):
     intensity: float = Field(1.0, description="0..5")
 
 
+class IdleCommand(BaseModel):
+    """Idle behaviour switches; ``on`` sets every part, the named parts override it; parts not given keep their
+    state."""
+
+    on: bool | None = Field(None, description="Every idle part on or off")
+    blink: bool | None = None
+    mouth: bool | None = None
+    eyelids: bool | None = None
+    neck: bool | None = None
+    gaze: bool | None = None
+    wobble: bool | None = None
+
+
 class Accepted(BaseModel):
     """A command was queued for the next tick."""
 
@@ -146,7 +160,8 @@ def _info(entry: Entry) -> CharacterInfo:
         head=spec.head,
         identity=spec.identity,
         seed=spec.seed,
-        idle=spec.idle,
+        idle=entry.idle is not None,
+        idle_parts={part: bool(entry.idle is not None and getattr(entry.idle, part)) for part in idle_parts()},
         expression_basis=spec.expression_basis,
         target_names=names,
         frame_bytes=frame_bytes(len(names)),
@@ -284,6 +299,14 @@ def create_app(server: LiveServer) -> FastAPI:
     def send_laughter(character_id: str, body: LaughterCommand) -> Accepted:
         """Play a laugh or smile now."""
         return queue(character_id, {"laugh": body.type, "intensity": body.intensity})
+
+    @app.post("/api/characters/{character_id}/idle", response_model=Accepted, status_code=202, dependencies=api,
+              responses=_ERRORS)  # fmt: skip
+    def send_idle(character_id: str, body: IdleCommand) -> Accepted:
+        """Switch idle behaviour (blinks, mouth and eyelid micro-motion, neck, gaze, wobble) on or off."""
+        switches: dict[str, bool] = dict.fromkeys(idle_parts(), body.on) if body.on is not None else {}
+        switches.update({part: on for part in idle_parts() if (on := getattr(body, part)) is not None})
+        return queue(character_id, {"idle": switches})
 
     @app.post("/api/characters/{character_id}/clip", response_model=Accepted, status_code=202, dependencies=api,
               responses=_ERRORS, openapi_extra={"requestBody": {"required": True, "content": {

@@ -16,6 +16,7 @@ key                meaning
 ``emotion``        an emotion or blend name (``"joy"``, ``"furious"``), with ``intensity`` 0..5 (default 1)
 ``pad``            ``[pleasure, arousal, dominance]``, each in -1..1
 ``laugh``          a laugh type (``"laughter"``), with ``intensity`` 0..5 (default 1)
+``idle``           ``true``/``false`` (all idle behaviour on/off) or ``{"blink": false, "gaze": true, ...}``
 ``character``      the character id (default: the first character)
 ``watch``          WebSocket only: switch the stream to this character id
 =================  =====================================================================================
@@ -69,6 +70,7 @@ __all__ = [
     "decode_frame",
     "encode_frame",
     "frame_bytes",
+    "idle_parts",
     "parse_message",
 ]
 
@@ -92,7 +94,7 @@ AU_KEYS: frozenset[str] = _au_keys()
 """Every AU key a message may hold: ``AU<code>`` for each face AU, plus ``AU<code>L``/``R`` for lateral ones."""
 
 _EXTENSION_KEYS = frozenset(
-    {"Speed", "speeds", "tau_s", "play", "emotion", "intensity", "pad", "laugh", "character", "watch"}
+    {"Speed", "speeds", "tau_s", "play", "emotion", "intensity", "pad", "laugh", "idle", "character", "watch"}
 )
 _OPENFACS_FAST_KEYS = AU_KEYS | {"Speed"}
 _NUMBER_TYPES = (int, float)  # JSON numbers; bool is excluded by the exact type test
@@ -162,6 +164,8 @@ class Message:
     """Intensity 0..5 of ``emotion`` and ``laugh``."""
     pad: tuple[float, float, float] | None = None
     """(pleasure, arousal, dominance), each in -1..1."""
+    idle: tuple[tuple[str, bool], ...] | None = None
+    """Idle switches to change, ``((part, on), ...)`` over :func:`idle_parts` (``true``/``false``: all parts)."""
     character: str | None = None
     """Target character id; None = the default (first) character, or the one a WebSocket watches."""
     watch: str | None = None
@@ -179,7 +183,13 @@ class Message:
     @property
     def has_events(self) -> bool:
         """True when the message carries a one-off event (emotion, laugh, PAD, play) that must not be merged."""
-        return self.emotion is not None or self.laugh is not None or self.pad is not None or self.play is not None
+        return (
+            self.emotion is not None
+            or self.laugh is not None
+            or self.pad is not None
+            or self.play is not None
+            or self.idle is not None
+        )
 
 
 def _number(key: str, value: Any, low: float, high: float) -> float:
@@ -243,6 +253,31 @@ def _play(value: Any) -> PlayRequest:
         apex_s=_number("play.apex_s", value.get("apex_s", 0.3), 0.0, 60.0),
         offset_s=_number("play.offset_s", value.get("offset_s", 0.3), 0.0, 60.0),
     )
+
+
+def idle_parts() -> tuple[str, ...]:
+    """The on/off switches of :class:`mien.facs.idle.IdleSettings` (``blink``, ``mouth``, ...)."""
+    from dataclasses import fields
+
+    from mien.facs.idle import IdleSettings
+
+    return tuple(f.name for f in fields(IdleSettings) if f.type in (bool, "bool"))
+
+
+def _idle(value: Any) -> tuple[tuple[str, bool], ...]:
+    parts = idle_parts()
+    if isinstance(value, bool):
+        return tuple((part, value) for part in parts)
+    if not isinstance(value, dict):
+        raise MessageRejected(Rejection.WRONG_TYPE, f"idle={value!r} must be true, false or an object"[:200])
+    switches = []
+    for part, on in value.items():
+        if part not in parts:
+            raise MessageRejected(Rejection.UNKNOWN_FIELD, f"idle[{part[:40]!r}]: expected one of {', '.join(parts)}")
+        if not isinstance(on, bool):
+            raise MessageRejected(Rejection.WRONG_TYPE, f"idle[{part}]={on!r} must be true or false"[:200])
+        switches.append((part, on))
+    return tuple(switches)
 
 
 def _character(key: str, value: Any) -> str:
@@ -325,6 +360,8 @@ def parse_message(data: bytes | str, max_bytes: int = MAX_MESSAGE_BYTES) -> Mess
             fields["tau_s"] = _au_map(key, value, 0.0, 3600.0)
         elif key == "play":
             fields["play"] = _play(value)
+        elif key == "idle":
+            fields["idle"] = _idle(value)
         elif key in ("emotion", "laugh"):
             fields[key] = _name(key, value)
         elif key == "intensity":

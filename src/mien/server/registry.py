@@ -63,6 +63,8 @@ class Entry:
     """Newest state message not yet applied."""
     events: deque[Message] = field(default_factory=lambda: deque(maxlen=MAX_EVENTS_PER_CHARACTER))
     """Events not yet applied, oldest first."""
+    idle: Any = None
+    """Current :class:`mien.facs.idle.IdleSettings` (None: idle off)."""
     clips: list[Any] = field(default_factory=list)
     """:class:`~mien.facs.clip.Clip` objects to start playing at the next tick."""
 
@@ -112,6 +114,10 @@ class Registry:
         rig, driver = self._rigs[key]
         row = int(self.batch.add_character(seed=spec.seed, idle=spec.idle, expression_basis=spec.expression_basis))
         entry = Entry(spec, row, rig, driver)
+        if spec.idle:
+            from mien.facs.idle import IdleSettings
+
+            entry.idle = IdleSettings()
         self.entries[spec.id] = entry
         return entry
 
@@ -162,7 +168,22 @@ class Registry:
         for au, tau_s in message.tau_s:
             self.batch.set_au(row, au, aus.get(au, 0.0), tau_s=tau_s)
 
-    def _apply_event(self, row: int, seed: int, message: Message, t_s: float) -> None:
+    def _apply_idle(self, entry: Entry, switches: tuple[tuple[str, bool], ...], t_s: float) -> None:
+        from dataclasses import replace
+
+        from mien.facs.idle import IdleSettings
+        from mien.server.protocol import idle_parts
+
+        current = entry.idle or replace(IdleSettings(), **dict.fromkeys(idle_parts(), False))
+        settings = replace(current, **dict(switches))
+        entry.idle = settings if any(getattr(settings, part) for part in idle_parts()) else None
+        rows = np.array([entry.row])
+        self.batch.idle.reset_rows(rows, np.array([entry.spec.seed]), entry.idle, t_s)
+
+    def _apply_event(self, entry: Entry, message: Message, t_s: float) -> None:
+        row, seed = entry.row, entry.spec.seed
+        if message.idle is not None:
+            self._apply_idle(entry, message.idle, t_s)
         if message.play is not None:
             p = message.play
             self.batch.play_au(row, p.au, p.intensity, onset_s=p.onset_s, apex_s=p.apex_s, offset_s=p.offset_s)
@@ -183,7 +204,7 @@ class Registry:
                     message, entry.state = entry.state, None
                     self._apply_state(entry.row, message)
                 while entry.events:
-                    self._apply_event(entry.row, entry.spec.seed, entry.events.popleft(), t_s)
+                    self._apply_event(entry, entry.events.popleft(), t_s)
                 while entry.clips:
                     self.batch.play_clip(entry.row, entry.clips.pop(0), start_s=t_s)
             except MienError as exc:
