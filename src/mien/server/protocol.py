@@ -311,6 +311,8 @@ def parse_message(data: bytes | str, max_bytes: int = MAX_MESSAGE_BYTES) -> Mess
     ...
     mien.server.protocol.MessageRejected: wrong_type: AU4='x' is not a number
     """
+    if isinstance(data, str):  # a WebSocket text message; the fast path below looks at the raw bytes
+        data = data.encode("utf-8")
     if len(data) > max_bytes:
         raise MessageRejected(Rejection.OVERSIZED, f"{len(data)} bytes > {max_bytes}")
     loads, decode_error = _JSON or _json()
