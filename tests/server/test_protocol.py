@@ -106,8 +106,14 @@ _keys = st.sampled_from([*sorted(AU_KEYS), "Speed", "emotion", "pad", "laugh", "
 
 
 @settings(max_examples=300, deadline=None)
-@given(st.one_of(st.binary(max_size=300), st.dictionaries(_keys, _json_values, max_size=6).map(orjson.dumps)))
-def test_fuzz_parse_message_returns_a_message_or_a_typed_rejection(data: bytes) -> None:
+@given(
+    st.one_of(
+        st.binary(max_size=300),
+        st.text(max_size=100),
+        st.dictionaries(_keys, _json_values, max_size=6).map(orjson.dumps),
+    )
+)
+def test_fuzz_parse_message_returns_a_message_or_a_typed_rejection(data: bytes | str) -> None:
     try:
         message = parse_message(data)
     except MessageRejected as exc:

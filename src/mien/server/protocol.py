@@ -114,6 +114,7 @@ class Rejection(enum.StrEnum):
     UNKNOWN_NAME = "unknown_name"
     UNKNOWN_CHARACTER = "unknown_character"
     ENGINE_ERROR = "engine_error"
+    INTERNAL_ERROR = "internal_error"
 
 
 class MessageRejected(MienError):
@@ -313,6 +314,8 @@ def parse_message(data: bytes | str, max_bytes: int = MAX_MESSAGE_BYTES) -> Mess
     """
     if isinstance(data, str):  # a WebSocket text message; the fast path below looks at the raw bytes
         data = data.encode("utf-8")
+    if isinstance(data, str):
+        data = data.encode("utf-8", "surrogatepass")
     if len(data) > max_bytes:
         raise MessageRejected(Rejection.OVERSIZED, f"{len(data)} bytes > {max_bytes}")
     loads, decode_error = _JSON or _json()

@@ -174,8 +174,10 @@ class Registry:
         from mien.facs.idle import IdleSettings
         from mien.server.protocol import idle_parts
 
-        current = entry.idle or replace(IdleSettings(), **dict.fromkeys(idle_parts(), False))
-        settings = replace(current, **dict(switches))
+        off: dict[str, Any] = dict.fromkeys(idle_parts(), False)
+        current = entry.idle or replace(IdleSettings(), **off)
+        changes: dict[str, Any] = dict(switches)
+        settings = replace(current, **changes)
         entry.idle = settings if any(getattr(settings, part) for part in idle_parts()) else None
         rows = np.array([entry.row])
         self.batch.idle.reset_rows(rows, np.array([entry.spec.seed]), entry.idle, t_s)

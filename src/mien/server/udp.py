@@ -4,12 +4,15 @@ newest message per character; the clock applies it (so tens of thousands of data
 from __future__ import annotations
 
 import asyncio
+import logging
 import socket
 
 from mien.server.protocol import MAX_MESSAGE_BYTES, MessageRejected, Rejection, parse_message
 from mien.server.registry import Registry
 
 __all__ = ["MAX_DATAGRAMS_PER_WAKEUP", "RECEIVE_BUFFER_BYTES", "OpenFacsEndpoint", "open_udp"]
+
+log = logging.getLogger("mien.server")
 
 MAX_DATAGRAMS_PER_WAKEUP = 256
 """Datagrams handled per event-loop wake-up before other work (the clock, HTTP) gets a turn."""
@@ -48,6 +51,10 @@ class OpenFacsEndpoint:
                 registry.submit(parse_message(data))
             except MessageRejected as exc:
                 registry.reject(exc)
+                continue
+            except Exception as exc:  # a bug must cost one datagram, not the endpoint
+                log.exception("datagram handling failed")
+                registry.reject(MessageRejected(Rejection.INTERNAL_ERROR, f"{type(exc).__name__}: {exc}"))
                 continue
             counters.datagrams_accepted += 1
 
