@@ -22,6 +22,7 @@ import urllib.request
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -106,8 +107,8 @@ class Page:
     def __init__(self, chromium: object, url: str) -> None:
         self.page = chromium.new_page(viewport=VIEWPORT)  # type: ignore[attr-defined]
         self.errors: list[str] = []
-        self.page.on("console", lambda m: m.type == "error" and self.errors.append(f"console: {m.text}"))
-        self.page.on("pageerror", lambda e: self.errors.append(f"pageerror: {e}"))
+        self.page.on("console", self._console)
+        self.page.on("pageerror", lambda error: self.errors.append(f"pageerror: {error}"))
         self.page.goto(url)
         self.page.wait_for_function(
             "document.body.dataset.ready === '1' && window.mienViewer.head !== null"
@@ -117,6 +118,10 @@ class Page:
         box = self.page.locator("#view").bounding_box()
         assert box is not None
         self.box = box
+
+    def _console(self, message: Any) -> None:
+        if message.type == "error":
+            self.errors.append(f"console: {message.text}")
 
     def canvas(self, rows: slice | None = None, columns: slice | None = None) -> np.ndarray:
         """(h, w, 3) uint8 pixels of the 3D view, or of its ``rows`` x ``columns`` part (a faster capture)."""
@@ -128,11 +133,11 @@ class Page:
         return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))
 
     def settle(self, timeout_s: float = 5.0) -> np.ndarray:
-        """The view once two screenshots 0.15 s apart agree (bounded in time)."""
+        """The view once two screenshots 0.1 s apart agree (bounded in time)."""
         deadline = time.monotonic() + timeout_s
         previous = self.canvas()
         while time.monotonic() < deadline:
-            time.sleep(0.15)
+            time.sleep(0.1)
             current = self.canvas()
             if np.abs(current[:-40].astype(int) - previous[:-40]).max() <= 2:  # the status line always changes
                 return current
@@ -143,8 +148,12 @@ class Page:
         self.page.close()
 
 
+Opener = Callable[[str], Page]
+"""Opens the viewer on a character id of the module's server."""
+
+
 @pytest.fixture()
-def open_page(chromium: object, live: Live) -> Iterator[callable]:  # type: ignore[valid-type]
+def open_page(chromium: object, live: Live) -> Iterator[Opener]:
     pages: list[Page] = []
 
     def opener(character: str) -> Page:
@@ -185,7 +194,7 @@ def _save(image: np.ndarray, path: Path) -> None:
     Image.fromarray(image).save(path)
 
 
-def test_face_renders_without_errors(open_page: callable, tmp_path: Path) -> None:  # type: ignore[valid-type]
+def test_face_renders_without_errors(open_page: Opener, tmp_path: Path) -> None:
     page = open_page(FIRST)
     image = page.settle()
     _save(image, tmp_path / "neutral.png")
@@ -205,7 +214,7 @@ def test_face_renders_without_errors(open_page: callable, tmp_path: Path) -> Non
     assert page.errors == []
 
 
-def test_au_sliders_come_from_the_catalogue(open_page: callable) -> None:  # type: ignore[valid-type]
+def test_au_sliders_come_from_the_catalogue(open_page: Opener) -> None:
     page = open_page(FIRST)
     labels = page.page.eval_on_selector_all("#au-sliders input[type=range]", "els => els.map(e => e.dataset.au)")
     assert labels == [f"AU{code}" for code, au in ACTION_UNITS.items() if au.kind == "face"]
@@ -240,16 +249,16 @@ def _latency(page: Page, regions: dict[str, tuple[slice, slice]], send: Callable
 
 
 def test_openfacs_udp_changes_mouth_and_brows_within_a_second(
-    open_page: callable,  # type: ignore[valid-type]
+    open_page: Opener,
     live: Live,
     tmp_path: Path,
 ) -> None:
     page = open_page(FIRST)
     neutral = page.settle()
     regions = _regions(neutral.shape[1], neutral.shape[0])
-    expressive = {f"AU{code}": 0 for code in OPENFACS_AUS}  # a plain OpenFACS datagram: every AU + Speed
+    expressive: dict[str, float] = {f"AU{code}": 0 for code in OPENFACS_AUS}  # plain OpenFACS: every AU + Speed
     expressive.update({"AU4": 5, "AU7": 3, "AU6": 4, "AU12": 5, "Speed": 0.3})  # anger brows, joy mouth
-    relaxed = {**{key: 0 for key in expressive}, "Speed": 0.3}
+    relaxed: dict[str, float] = {**{key: 0 for key in expressive}, "Speed": 0.3}
 
     def datagram(message: dict[str, float]) -> Callable[[], None]:
         def send() -> None:
@@ -276,7 +285,7 @@ def test_openfacs_udp_changes_mouth_and_brows_within_a_second(
     assert page.errors == []
 
 
-def test_emotion_button_changes_the_face(open_page: callable, tmp_path: Path) -> None:  # type: ignore[valid-type]
+def test_emotion_button_changes_the_face(open_page: Opener, tmp_path: Path) -> None:
     page = open_page(SECOND)
     before = page.settle()
     regions = _regions(before.shape[1], before.shape[0])
@@ -293,7 +302,7 @@ def test_emotion_button_changes_the_face(open_page: callable, tmp_path: Path) ->
     assert page.errors == []
 
 
-def test_characters_can_be_created_and_removed_from_the_page(open_page: callable) -> None:  # type: ignore[valid-type]
+def test_characters_can_be_created_and_removed_from_the_page(open_page: Opener) -> None:
     page = open_page(SECOND).page
     page.fill("#character-new-name", "visitor")
     page.select_option("#character-new-head", "builtin")
@@ -316,7 +325,7 @@ def _wait_for_change(page: Page, before: np.ndarray, region: tuple[slice, slice]
     return change
 
 
-def test_au_slider_laughter_and_clip_drive_the_face(open_page: callable, tmp_path: Path) -> None:  # type: ignore[valid-type]
+def test_au_slider_laughter_and_clip_drive_the_face(open_page: Opener, tmp_path: Path) -> None:
     from mien.exchange.clip_json import write
     from mien.facs.catalogue import FACE_CHANNELS
     from mien.facs.clip import Clip
@@ -332,34 +341,57 @@ def test_au_slider_laughter_and_clip_drive_the_face(open_page: callable, tmp_pat
     back = page.settle()
     assert _change(neutral, back, mouth) < 1.0  # reset: every AU to 0 again
 
-    page.page.click("button[data-laughter=laughter]")
-    assert _wait_for_change(page, back, mouth) > 3.0
-    page.settle(timeout_s=8.0)  # the laugh runs its course
-
     values = np.zeros((30, len(FACE_CHANNELS)))
     values[:, FACE_CHANNELS.index("AU26")] = np.linspace(0.0, 5.0, 30)  # jaw drop over 1 s
     clip_path = tmp_path / "jaw.json"
     write(Clip(values, 30.0, FACE_CHANNELS), clip_path)
-    before = page.settle()
     page.page.set_input_files("#clip-file", str(clip_path))
     page.page.click("#clip-play")
-    assert _wait_for_change(page, before, mouth) > 3.0
+    assert _wait_for_change(page, back, mouth) > 3.0
     assert "playing jaw.json" in page.page.locator("#status-message").inner_text()
     _save(page.canvas(), tmp_path / "clip.png")
+
+    after_clip = page.settle()  # the 1 s clip is over
+    page.page.click("button[data-laughter=laughter]")
+    assert _wait_for_change(page, after_clip, mouth) > 3.0
     assert page.errors == []
 
 
-def test_idle_switches_show_the_characters_setting(open_page: callable, live: Live) -> None:  # type: ignore[valid-type]
+def _get(url: str) -> Any:
+    with urllib.request.urlopen(url, timeout=10) as response:
+        return json.load(response)
+
+
+def test_idle_switches_follow_the_server(open_page: Opener, live: Live) -> None:
     page = open_page(THIRD).page
     flags = page.eval_on_selector_all("#idle-toggles input", "els => els.map(e => [e.dataset.idle, e.checked])")
     assert flags == [["blink", False], ["micro-motion", False], ["gaze", False]]  # started with --no-idle
     page.click("#idle-toggles input[data-idle=blink]")  # the {"idle": {...}} command over the socket
-    page.wait_for_timeout(1500)
-    with urllib.request.urlopen(f"{live.url}/api/characters") as response:
-        idle = {c["id"]: c["idle"] for c in json.load(response)}[THIRD]
-    # Either the server switched idle on, or the page says it cannot (servers without the idle command).
-    assert idle or "cannot switch idle live" in page.locator("#status-message").inner_text()
+    deadline = time.monotonic() + 5.0
+    parts: dict[str, bool] = {}
+    while time.monotonic() < deadline and not parts.get("blink"):
+        parts = {c["id"]: c["idle_parts"] for c in _get(f"{live.url}/api/characters")}[THIRD]
+        time.sleep(0.1)
+    assert parts == {"blink": True, "mouth": False, "eyelids": False, "neck": False, "gaze": False, "wobble": False}
     page.click("#idle-toggles input[data-idle=blink]")
+    page.wait_for_timeout(600)
+    assert not any({c["id"]: c["idle_parts"] for c in _get(f"{live.url}/api/characters")}[THIRD].values())
+    assert "cannot" not in page.locator("#status-message").inner_text()
+
+
+def test_commands_fall_back_to_http_while_the_socket_is_closed(open_page: Opener, live: Live) -> None:
+    page = open_page(SECOND).page
+    before = _get(f"{live.url}/api/health")["http_commands"]
+    page.evaluate("window.mienViewer.wsOpen = false")  # as while reconnecting
+    for selector in ("button[data-emotion=surprise]", "button[data-laughter=sly_smile]", "#pad-reset"):
+        page.click(selector)
+    page.locator("#au-sliders input[data-au=AU1]").fill("2")
+    deadline = time.monotonic() + 5.0
+    while time.monotonic() < deadline and _get(f"{live.url}/api/health")["http_commands"] < before + 4:
+        time.sleep(0.1)
+    assert _get(f"{live.url}/api/health")["http_commands"] >= before + 4  # emotion, laugh, PAD, AU state
+    assert "not connected" not in page.locator("#status-message").inner_text()
+    assert "POST" not in page.locator("#status-message").inner_text()  # no API error shown
 
 
 def test_a_token_server_needs_the_token_in_the_address(chromium: object) -> None:

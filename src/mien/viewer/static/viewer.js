@@ -115,7 +115,19 @@ async function api(method, path, body, contentType = "application/json") {
   return data;
 }
 
-const HTTP_ROUTES = { emotion: "emotion", pad: "pad", laugh: "laughter" };
+/** The HTTP API route and body of a socket command (used while the WebSocket is closed), or null. */
+function httpCommand(command) {
+  if ("emotion" in command) return ["emotion", { emotion: command.emotion, intensity: command.intensity }];
+  if ("pad" in command) {
+    const [pleasure, arousal, dominance] = command.pad;
+    return ["pad", { pleasure, arousal, dominance }];
+  }
+  if ("laugh" in command) return ["laughter", { type: command.laugh, intensity: command.intensity }];
+  if ("idle" in command) return ["idle", command.idle];
+  const aus = Object.fromEntries(Object.entries(command).filter(([key]) => /^AU\d/.test(key)));
+  if (Object.keys(aus).length) return ["aus", { aus, speed: command.Speed ?? null }];
+  return null;
+}
 
 /** Send a JSON command for the watched character: over the WebSocket, or the HTTP API when it is closed. */
 function send(command) {
@@ -123,17 +135,13 @@ function send(command) {
     state.ws.send(JSON.stringify(command));
     return;
   }
-  if (!state.character) {
-    setStatus("no character to command");
-    return;
-  }
-  const key = Object.keys(command).find((k) => k in HTTP_ROUTES);
-  const route = key ? HTTP_ROUTES[key] : Object.keys(command).some((k) => /^AU\d/.test(k)) ? "aus" : null;
-  if (!route) {
+  const http = httpCommand(command);
+  if (!state.character || !http) {
     setStatus("not connected: command not sent");
     return;
   }
-  api("POST", `/api/characters/${encodeURIComponent(state.character)}/${route}`, command).catch((e) => setStatus(e.message));
+  const [route, body] = http;
+  api("POST", `/api/characters/${encodeURIComponent(state.character)}/${route}`, body).catch((e) => setStatus(e.message));
 }
 
 function connect() {
@@ -493,15 +501,19 @@ function buildIdle(toggles) {
     const settings = {};
     for (const { input, flags } of inputs) for (const flag of flags) settings[flag] = input.checked;
     send({ idle: settings });
-    // The server reports idle per character; say so when it did not take the switch (older servers).
+    // Read back what the server holds (a server without the idle command keeps the character's setting).
     const id = state.character;
     await new Promise((resolve) => setTimeout(resolve, 400));
     try {
-      const info = await api("GET", "/api/characters");
-      const entry = (Array.isArray(info) ? info : []).find((e) => String(characterId(e)) === id);
-      const wanted = Object.values(settings).some(Boolean);
-      if (entry && typeof entry.idle === "boolean" && entry.idle !== wanted) {
-        setStatus(`this server cannot switch idle live: ${id} keeps idle ${entry.idle ? "on" : "off"} (mien serve --no-idle)`);
+      const list = await api("GET", "/api/characters");
+      const entry = (Array.isArray(list) ? list : []).find((e) => String(characterId(e)) === id);
+      if (!entry) return;
+      state.characters.set(id, entry);
+      const held = entry.idle_parts || {};
+      const taken = Object.entries(settings).every(([flag, on]) => !(flag in held) || held[flag] === on);
+      if (!taken || !entry.idle_parts) {
+        setStatus(`this server cannot switch idle live: ${id} keeps idle ${entry.idle ? "on" : "off"}`);
+        showIdle(entry);
       }
     } catch (error) {
       setStatus(error.message);
@@ -513,6 +525,7 @@ function buildIdle(toggles) {
     input.type = "checkbox";
     input.checked = true;
     input.dataset.idle = toggle.name;
+    input.dataset.flags = JSON.stringify(toggle.flags);
     input.addEventListener("change", sendIdle);
     label.append(input, toggle.name);
     box.append(label);
@@ -520,10 +533,16 @@ function buildIdle(toggles) {
   }
 }
 
-/** Show a character's idle switches as the server reports them (``idle``: all on or all off). */
+/** Show a character's idle switches as the server reports them (``idle_parts``: each IdleSettings flag). */
 function showIdle(info) {
-  if (!info || typeof info.idle !== "boolean") return;
-  document.querySelectorAll("#idle-toggles input").forEach((input) => (input.checked = info.idle));
+  if (!info) return;
+  const parts = info.idle_parts || {};
+  document.querySelectorAll("#idle-toggles input").forEach((input) => {
+    const flags = JSON.parse(input.dataset.flags);
+    const on = flags.map((flag) => (flag in parts ? parts[flag] : Boolean(info.idle)));
+    input.checked = on.every(Boolean);
+    input.indeterminate = on.some(Boolean) && !input.checked;
+  });
 }
 
 function buildActionUnits(controls) {
