@@ -123,7 +123,9 @@ class LiveServer:
             raise
         self.http_port = int(sock.getsockname()[1])
         app = create_app(self)
-        config = uvicorn.Config(app, log_level="warning", lifespan="off", ws="websockets-sansio", access_log=False)
+        config = uvicorn.Config(
+            app, log_level="warning", lifespan="off", ws="websockets-sansio", access_log=False, ws_max_size=65536
+        )
         self._uvicorn = uvicorn.Server(config)
         self.started_monotonic = time.monotonic()
         http = asyncio.create_task(self._uvicorn.serve(sockets=[sock]), name="mien-http")

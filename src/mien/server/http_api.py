@@ -316,6 +316,9 @@ def create_app(server: LiveServer) -> FastAPI:
     ) -> Accepted:
         """Play a clip file (its bytes as the body; ``suffix`` picks the reader) on the character now."""
         entry = entry_of(character_id)
+        declared = request.headers.get("content-length", "0")
+        if declared.isdigit() and int(declared) > _MAX_CLIP_BYTES:
+            raise HTTPException(413, f"clip of {declared} bytes is over {_MAX_CLIP_BYTES}")
         data = await request.body()
         if len(data) > _MAX_CLIP_BYTES:
             raise HTTPException(413, f"clip of {len(data)} bytes is over {_MAX_CLIP_BYTES}")
