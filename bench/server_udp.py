@@ -26,7 +26,7 @@ from mien.client import openfacs_message
 from mien.server.protocol import parse_message
 
 N_DATAGRAMS = 60_000
-RATES = (20_000, 30_000)
+RATES = (20_000, 30_000, 50_000)
 
 
 def datagrams(n: int) -> list[bytes]:
