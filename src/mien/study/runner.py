@@ -23,9 +23,11 @@ store's retries (the page retries); the server never dies of a request.
 # No ``from __future__ import annotations``: FastAPI reads the request models of the endpoints (classes local
 # to create_app) from the evaluated annotations.
 
+import contextlib
 import re
 import secrets
 import time
+from collections.abc import AsyncIterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -44,6 +46,10 @@ STATIC = Path(__file__).with_name("static")
 
 PARTICIPANT_PATTERN = re.compile(r"^[A-Za-z0-9_.@:-]{1,128}$")
 """Accepted participant ids (recruitment platforms' ids fit: letters, digits, ``_ . @ : -``, up to 128)."""
+
+WORKER_THREADS = 8
+"""Threads running the (blocking, database) endpoints. Few on purpose: more threads than cores only contend
+for the GIL and starve the event loop; extra requests wait their turn on the loop instead."""
 
 BUILTIN_CONSENT = (
     "This study shows short videos of a virtual character's face and asks how you perceive them. Taking part "
@@ -102,7 +108,14 @@ def create_app(design: "Design", manifest: dict[str, Any], stimuli_folder: str |
         ratings: dict[str, int]
         nr_shows: int = Field(ge=0, le=10_000)
 
-    app = FastAPI(title=f"mien study: {study}", docs_url=None, redoc_url=None)
+    @contextlib.asynccontextmanager
+    async def lifespan(_app: FastAPI) -> AsyncIterator[None]:
+        import anyio.to_thread
+
+        anyio.to_thread.current_default_thread_limiter().total_tokens = WORKER_THREADS
+        yield
+
+    app = FastAPI(title=f"mien study: {study}", docs_url=None, redoc_url=None, lifespan=lifespan)
     app.mount("/static", StaticFiles(directory=STATIC), name="static")
 
     @app.exception_handler(StorageUnavailableError)
@@ -262,4 +275,5 @@ def serve(app: "FastAPI", host: str = "127.0.0.1", port: int = 8000) -> None:
         import uvicorn
     except ImportError:
         raise MissingExtraError("uvicorn", "study") from None
-    uvicorn.run(app, host=host, port=port, log_level="warning", access_log=False)
+    # keep-alive longer than a participant's time per stimulus, so the browser reuses its connection
+    uvicorn.run(app, host=host, port=port, log_level="warning", access_log=False, timeout_keep_alive=75)

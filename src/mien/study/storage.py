@@ -201,9 +201,8 @@ class Store:
                 raise MissingExtraError("psycopg", "study") from None
             engine = sa.create_engine(
                 url,
-                pool_size=20,
-                max_overflow=20,
-                pool_pre_ping=True,
+                pool_size=10,
+                max_overflow=10,  # no pre-ping round trip per checkout: a dropped connection is retried
                 connect_args={"connect_timeout": max(1, round(busy_timeout_s))},
             )
         self._insert = insert
