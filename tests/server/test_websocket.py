@@ -112,3 +112,18 @@ def test_slow_and_vanishing_viewers_do_not_block_the_clock(live, wait_until) -> 
         for sock in stalled:
             sock.close()
     wait_until(lambda: httpx.get(f"{live.base_url}/api/health").json()["viewers"] == 0, what="no viewers")
+
+
+def test_garbage_on_the_sockets_is_dropped_and_counted(live, wait_until) -> None:
+    with WebSocketClient(f"ws://127.0.0.1:{live.http_port}/ws") as viewer:
+        viewer._ws.send(os.urandom(200).replace(b"{", b"x"))  # binary garbage as a command
+        viewer._ws.send("x" * 5000)  # an oversized text command
+        health = wait_until(
+            lambda: (h := httpx.get(f"{live.base_url}/api/health").json())["rejections"].get("oversized") and h
+        )
+        assert health["rejections"] == {"malformed_json": 1, "oversized": 1}
+        assert viewer.recv_frame().weights.shape == (52,)  # the connection lives on
+    with socket.create_connection(("127.0.0.1", live.http_port), timeout=5.0) as raw:  # not HTTP at all
+        raw.sendall(os.urandom(512) + b"\r\n\r\n")
+        raw.recv(1024)
+    assert httpx.get(f"{live.base_url}/api/health").json()["status"] == "ok"
