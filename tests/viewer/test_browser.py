@@ -410,3 +410,22 @@ def test_a_token_server_needs_the_token_in_the_address(chromium: object) -> None
             assert "token" in bare.locator("#status-message").inner_text()
         finally:
             bare.close()
+
+
+def test_the_page_reconnects_when_the_server_comes_back(chromium: object) -> None:
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:  # a free port, to come back on
+        probe.bind(("127.0.0.1", 0))
+        port = str(probe.getsockname()[1])
+    with _serve("--http-port", port, "--no-idle") as server:
+        page = Page(chromium, f"{server.url}/")
+    try:
+        page.page.wait_for_function("window.mienViewer.wsOpen === false", timeout=10_000)
+        assert page.page.locator("#status-connection").inner_text() == "disconnected"
+        with _serve("--http-port", port, "--no-idle"):
+            seen = page.page.evaluate("window.mienViewer.ticksSeen")
+            page.page.wait_for_function(f"window.mienViewer.ticksSeen > {seen + 3}", timeout=15_000)
+            assert page.page.locator("#status-connection").inner_text() == "live"
+        # the browser itself logs each refused reconnection attempt; nothing else may appear
+        assert [e for e in page.errors if "ERR_CONNECTION_REFUSED" not in e] == []
+    finally:
+        page.close()

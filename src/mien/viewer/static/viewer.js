@@ -66,7 +66,7 @@ const state = {
   frameDirty: false,
   lastTick: null,
   ticksSeen: 0,
-  head: null, // { root, pivot, meshes: [{mesh, map: Int32Array}], names: [...], eyes: [...] }
+  head: null, // { root, pivot, poseNode, poseRest, meshes: [{ mesh, map: Int32Array }], names, eyes }
   needsRender: true,
   renders: 0,
   loadingHead: null,
@@ -171,10 +171,11 @@ function connect() {
     state.frameDirty = true;
     state.ticksSeen += 1;
   };
-  ws.onclose = () => {
+  ws.onclose = (event) => {
     if (state.ws !== ws) return; // replaced on purpose
     state.wsOpen = false;
     setConnection("disconnected", false);
+    if (event.reason) setStatus(`server closed the stream: ${event.reason}`);
     setTimeout(() => state.ws === ws && connect(), state.reconnectMs);
     state.reconnectMs = Math.min(state.reconnectMs * 2, 5000);
   };
@@ -201,8 +202,14 @@ function watch(characterId) {
   state.frame = null;
   showIdle(state.characters.get(characterId));
   loadHead(characterId);
-  if (state.wsOpen) state.ws.send(JSON.stringify({ watch: characterId }));
-  else if (!state.ws || state.ws.readyState > 1) connect();
+  if (state.wsOpen) {
+    state.ws.send(JSON.stringify({ watch: characterId }));
+    return;
+  }
+  const old = state.ws; // connecting to another character, closing, or closed: start over
+  state.ws = null;
+  if (old && old.readyState <= 1) old.close();
+  connect();
 }
 
 // ---------------------------------------------------------------------------------------------------------
