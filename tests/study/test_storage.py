@@ -45,6 +45,7 @@ def plan(_ordinal: int) -> tuple[list[str], list[str], list[int]]:
 
 
 def test_answers_idempotent_and_frame(store: Store, tmp_path: Path) -> None:
+    assert list(store.answers_frame("st").columns) == COLUMNS  # the factor columns even with no answer yet
     record = store.ensure_participant("st", "p1", plan)
     assert record.sequence == ("s002", "s001") and record.ordinal == 0
     assert store.ensure_participant("st", "p1", plan) == record

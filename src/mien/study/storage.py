@@ -529,9 +529,18 @@ class Store:
             with self.engine.connect() as connection:
                 return list(connection.execute(query))
 
+        factor_query = sa.select(stimuli.c.conditions)
+        if study is not None:
+            factor_query = factor_query.where(stimuli.c.study == study)
+
+        def read_factors() -> list[str]:
+            with self.engine.connect() as connection:
+                return list(connection.execute(factor_query).scalars())
+
         rows = self._retry(read)
         conditions = [json.loads(r.conditions) for r in rows]
-        present = {key for c in conditions for key in c}
+        # factors from every registered stimulus, so the columns are there even before any answer
+        present = {key for text in self._retry(read_factors) for key in json.loads(text)}
         factors = [f for f in (*BROEKENS_FACTORS, *MASCARO_FACTORS) if f in present]
         factors += sorted(present - set(factors))
         records = []
