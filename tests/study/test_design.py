@@ -75,6 +75,8 @@ sly_smile = "A sly, knowing smile"
         {"laughter_type": "false_laughter", "description": "False laughter"},
     ]
     assert [q.key for q in questions("mascaro")] == ["feels_right", "represents_description"]
+    with pytest.raises(InvalidValueError, match=r"stimuli\.heads"):
+        load_design(write(tmp_path, text.replace("[stimuli]", '[stimuli]\nheads = ["ict:a"]')))
 
 
 @pytest.mark.parametrize(

@@ -74,6 +74,9 @@ ORDERS: tuple[str, ...] = ("counterbalanced", "random", "fixed")
 """Orders of the within-subject blocks: balanced Latin square over participants, random per participant, or
 the design order."""
 
+BROEKENS_ONLY_KEYS: tuple[str, ...] = ("expressions", "heads", "bases", "views", "distances_m", "intensities")
+"""``[stimuli]`` keys of Broekens designs only."""
+
 BASES: tuple[str, ...] = ("facs", "feature_points")
 """Expression bases (:class:`mien.character.Character` ``expression_basis``)."""
 
@@ -348,6 +351,15 @@ def parse_design(data: dict[str, Any], path: Path, sha256: str = "") -> Design:
     protocol = study.get("protocol", "broekens")
     if protocol not in PROTOCOLS:
         raise UnknownNameError(f"protocol in {path} study.protocol", protocol, PROTOCOLS)
+    unused = ("laughter_types", "descriptions") if protocol == "broekens" else BROEKENS_ONLY_KEYS
+    for key in unused:
+        if key in s:
+            raise _fail(
+                path,
+                f"stimuli.{key}",
+                s[key],
+                f"no such key in a {protocol} design (Mascaró stimuli use the default head)",
+            )
     source = s.get("source", "render")
     if source not in ("render", "files"):
         raise UnknownNameError(f"stimulus source in {path} stimuli.source", source, ("render", "files"))
