@@ -61,7 +61,12 @@ def test_page_import_map_and_three(client: TestClient) -> None:
         "three/addons/": "/vendor/three/examples/jsm/",
     }
     assert "http://" not in page.text and "https://" not in page.text  # nothing from the internet
-    for path in (imports["three"], imports["three/addons/"] + "loaders/GLTFLoader.js", "/viewer/viewer.js"):
+    for path in (
+        imports["three"],
+        imports["three/addons/"] + "loaders/GLTFLoader.js",
+        "/viewer/viewer.js",
+        "/viewer/frame.js",
+    ):
         response = client.get(path)
         assert response.status_code == 200, path
         assert "javascript" in response.headers["content-type"]
