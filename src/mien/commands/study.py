@@ -108,38 +108,20 @@ def _checked_manifest(design: Design, folder: Path) -> dict:
     return manifest
 
 
-def _check_port(host: str, port: int) -> None:
-    import socket
-
-    from mien.errors import InvalidValueError
-
-    if not 0 <= port <= 65535:
-        raise InvalidValueError("--port", port, "a TCP port 0..65535")
-    try:
-        with socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET, socket.SOCK_STREAM) as probe:
-            probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-            probe.bind((host, port))
-    except OSError as error:
-        raise InvalidValueError(
-            "--port", port, f"a free port on {host} ({error.strerror}); stop the other server or pick another port"
-        ) from None
-
-
 def run_serve(args: argparse.Namespace) -> int:
-    from mien.study.runner import create_app, serve
+    from mien.study.runner import create_app, listen, serve
 
-    _check_port(args.host, args.port)
-    design = _design(args)
-    folder = _stimuli_folder(args, design)
-    manifest = _checked_manifest(design, folder)
-    store = _store(args, design)
-    store.register_stimuli(design.name, design.protocol, manifest["stimuli"])
-    app = create_app(design, manifest, folder, store)
-    print(f"study {design.name!r}: http://{args.host}:{args.port}/?participant=ID  (Ctrl-C to stop)", flush=True)
-    try:
-        serve(app, args.host, args.port)
-    finally:
-        store.close()
+    sock = listen(args.host, args.port)  # first: a taken port is said before any work
+    with sock:
+        design = _design(args)
+        folder = _stimuli_folder(args, design)
+        manifest = _checked_manifest(design, folder)
+        with _store(args, design) as store:
+            store.register_stimuli(design.name, design.protocol, manifest["stimuli"])
+            app = create_app(design, manifest, folder, store)
+            port = sock.getsockname()[1]
+            print(f"study {design.name!r}: http://{args.host}:{port}/?participant=ID  (Ctrl-C to stop)", flush=True)
+            serve(app, sock)
     return 0
 
 

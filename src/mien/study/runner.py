@@ -26,6 +26,7 @@ store's retries (the page retries); the server never dies of a request.
 import contextlib
 import re
 import secrets
+import socket
 import time
 from collections.abc import AsyncIterator
 from pathlib import Path
@@ -39,7 +40,7 @@ if TYPE_CHECKING:
     from mien.study.design import Design
     from mien.study.storage import ParticipantRecord, Store
 
-__all__ = ["PARTICIPANT_PATTERN", "create_app", "serve"]
+__all__ = ["PARTICIPANT_PATTERN", "create_app", "listen", "serve"]
 
 STATIC = Path(__file__).with_name("static")
 """The pages: index.html, study.js, study.css."""
@@ -269,11 +270,34 @@ def create_app(design: "Design", manifest: dict[str, Any], stimuli_folder: str |
     return app
 
 
-def serve(app: "FastAPI", host: str = "127.0.0.1", port: int = 8000) -> None:
-    """Run ``app`` with uvicorn until interrupted (Ctrl-C)."""
+def listen(host: str = "127.0.0.1", port: int = 8000) -> socket.socket:
+    """A listening TCP socket on ``host``:``port`` (0 = any free port; read it with ``getsockname()``).
+
+    Raises :class:`~mien.errors.InvalidValueError` naming the port when it is taken or cannot be bound.
+    """
+    from mien.errors import InvalidValueError
+
+    if not 0 <= port <= 65535:
+        raise InvalidValueError("--port", port, "a TCP port 0..65535")
+    sock = socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET, socket.SOCK_STREAM)
+    try:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        sock.bind((host, port))
+        sock.listen(2048)
+    except OSError as error:
+        sock.close()
+        raise InvalidValueError(
+            "--port", port, f"a free port on {host} ({error.strerror}); stop the other server or pick another port"
+        ) from None
+    return sock
+
+
+def serve(app: "FastAPI", sock: socket.socket) -> None:
+    """Run ``app`` with uvicorn on the listening socket ``sock`` (see :func:`listen`) until interrupted."""
     try:
         import uvicorn
     except ImportError:
         raise MissingExtraError("uvicorn", "study") from None
     # keep-alive longer than a participant's time per stimulus, so the browser reuses its connection
-    uvicorn.run(app, host=host, port=port, log_level="warning", access_log=False, timeout_keep_alive=75)
+    config = uvicorn.Config(app, log_level="warning", access_log=False, timeout_keep_alive=75)
+    uvicorn.Server(config).run(sockets=[sock])
