@@ -66,6 +66,7 @@ def test_page_import_map_and_three(client: TestClient) -> None:
         imports["three/addons/"] + "loaders/GLTFLoader.js",
         "/viewer/viewer.js",
         "/viewer/frame.js",
+        "/viewer/pose.js",
     ):
         response = client.get(path)
         assert response.status_code == 200, path

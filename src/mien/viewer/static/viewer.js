@@ -9,6 +9,7 @@ import * as THREE from "three";
 import { GLTFLoader } from "three/addons/loaders/GLTFLoader.js";
 import { OrbitControls } from "three/addons/controls/OrbitControls.js";
 import { decodeFrame } from "./frame.js";
+import { poseQuaternion } from "./pose.js";
 
 const params = new URLSearchParams(location.search);
 const token = params.get("token") || "";
@@ -298,8 +299,6 @@ function prepareHead(root) {
   return { root, pivot, poseNode, poseRest, meshes, names, eyes };
 }
 
-const DEG = Math.PI / 180;
-const euler = new THREE.Euler();
 const gazeQuaternion = new THREE.Quaternion();
 const headQuaternion = new THREE.Quaternion();
 
@@ -307,17 +306,15 @@ function applyFrame(frame) {
   const head = state.head;
   if (!head) return;
   const w = frame.weights;
+  if (w.length !== head.names.length) return; // a frame of the previous character (another head) in flight
   for (const { mesh, map } of head.meshes) {
     const influences = mesh.morphTargetInfluences;
     for (let i = 0; i < map.length; i++) influences[i] = map[i] >= 0 && map[i] < w.length ? w[map[i]] : 0;
   }
   const [yaw, pitch, roll, gazeYaw, gazePitch] = frame.pose;
-  // mien: yaw > 0 turns to the character's left (+x), pitch > 0 raises the chin, roll > 0 toward the left
-  // shoulder; in three.js (+y up, +z toward the viewer) that is +y, -x and -z rotations.
-  headQuaternion.setFromEuler(euler.set(-pitch * DEG, yaw * DEG, -roll * DEG, "YXZ"));
-  head.poseNode.quaternion.copy(head.poseRest).multiply(headQuaternion);
+  head.poseNode.quaternion.copy(head.poseRest).multiply(poseQuaternion(yaw, pitch, roll, headQuaternion));
   if (head.eyes.length) {
-    gazeQuaternion.setFromEuler(euler.set(-gazePitch * DEG, gazeYaw * DEG, 0, "YXZ"));
+    poseQuaternion(gazeYaw, gazePitch, 0, gazeQuaternion); // gaze: mien.rig.pose.gaze_rotation
     for (const eye of head.eyes) eye.node.quaternion.copy(eye.rest).multiply(gazeQuaternion);
   }
 }
