@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import os
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -102,9 +103,10 @@ def db_url(request: pytest.FixtureRequest, tmp_path: Path) -> str:
 
 @pytest.fixture
 def server(design_path: Path, db_url: str) -> Iterator[Server]:
-    from tests.conftest import free_port
-
-    running = Server(design_path, db_url, free_port())
+    with socket.socket() as probe:  # a free port, kept across the restart
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    running = Server(design_path, db_url, port)
     running.start()
     yield running
     running.stop()
