@@ -195,3 +195,9 @@ def test_idle_switches(live, wait_until) -> None:
     assert httpx.post(f"{base}/api/characters/a/idle", json={"on": False}).status_code == 202
     wait_until(lambda: info()["a"]["idle"] is False, what="idle off")
     assert info()["b"]["idle"] is False
+
+
+def test_no_page_that_downloads_from_a_cdn(live) -> None:
+    for path in ("/docs", "/redoc"):
+        response = httpx.get(f"{live.base_url}{path}")
+        assert response.status_code == 404 or "cdn" not in response.text.lower()

@@ -10,7 +10,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "serve",
         help="serve live faces: OpenFACS UDP API, WebSocket frames, HTTP API",
         description="Run the live server: a drop-in OpenFACS UDP endpoint (port 5000), a WebSocket stream of "
-        "binary frames (/ws) and an HTTP API with an OpenAPI description (/docs, /openapi.json). "
+        "binary frames (/ws) and an HTTP API with an OpenAPI description (/openapi.json). "
         "Beyond loopback, HTTP and WebSocket need an access token (printed at start).",
     )
     parser.add_argument("--host", default="127.0.0.1", help="address of every endpoint (default %(default)s)")
@@ -76,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
         host = f"[{args.host}]" if ":" in args.host else args.host
         query = f"?token={server.token}" if server.token else ""
         print(f"mien serve: OpenFACS UDP on {host}:{server.udp_port}", flush=True)
-        print(f"mien serve: HTTP on http://{host}:{server.http_port}/{query} (API docs: /docs)", flush=True)
+        print(f"mien serve: HTTP on http://{host}:{server.http_port}/{query} (OpenAPI: /openapi.json)", flush=True)
         print(f"mien serve: WebSocket frames on ws://{host}:{server.http_port}/ws{query}", flush=True)
         print(f"mien serve: characters {', '.join(ids)} at {args.tick_hz:g} Hz; Ctrl-C stops", flush=True)
         if not is_loopback(args.host):

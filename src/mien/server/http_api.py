@@ -173,6 +173,8 @@ def create_app(server: LiveServer) -> FastAPI:
     import orjson
 
     app = FastAPI(
+        docs_url=None,  # Swagger UI and ReDoc load their scripts from a CDN; mien never downloads at run time
+        redoc_url=None,
         title="mien live",
         version="1",
         description="Drive virtual characters' faces: AUs (OpenFACS), emotions, PAD, laughter. "
