@@ -100,9 +100,10 @@ def test_slow_and_vanishing_viewers_do_not_block_the_clock(live, wait_until) -> 
             received = [good.recv_frame() for _ in range(60)]
             elapsed = time.monotonic() - begin
             assert received[-1].tick - start_tick >= 60 and elapsed < 10.0  # the good viewer keeps receiving
-            # the stalled viewers' frames pile up in nothing: only the newest is kept
-            health = wait_until(lambda: (h := httpx.get(f"{live.base_url}/api/health").json())["frames_dropped"] and h)
+            # (the newest-frame slot itself is checked without sockets in test_registry.py)
+            health = httpx.get(f"{live.base_url}/api/health").json()
             assert health["viewers"] == 4 and health["tick_errors"] == 0
+            assert health["frames_sent"] >= 4 * 60 * 0.5  # the stalled viewers were handed frames too
             for sock in stalled[:2]:  # vanish without a close frame
                 sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, b"\x01\x00\x00\x00\x00\x00\x00\x00")
                 sock.close()

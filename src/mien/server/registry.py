@@ -188,7 +188,9 @@ class Registry:
             self._apply_idle(entry, message.idle, t_s)
         if message.play is not None:
             p = message.play
-            self.batch.play_au(row, p.au, p.intensity, onset_s=p.onset_s, apex_s=p.apex_s, offset_s=p.offset_s)
+            self.batch.play_au(
+                row, p.au, p.intensity, onset_s=p.onset_s, apex_s=p.apex_s, offset_s=p.offset_s, start_s=t_s
+            )
         if message.emotion is not None:
             self.batch.emote(row, message.emotion, message.intensity, t_s)
         if message.pad is not None:
