@@ -134,6 +134,10 @@ def test_three_js_plays_the_animation_and_pixels_change(chromium, served: str, t
 
 BLENDER_SCRIPT = """
 import bpy, json, sys
+import numpy
+# Debian's Blender 3.4 glTF importer still uses numpy.bool, which numpy 1.24 (Debian's) removed; alias it back.
+if "bool" not in vars(numpy):
+    numpy.bool = bool
 bpy.ops.wm.read_factory_settings(use_empty=True)
 bpy.ops.import_scene.gltf(filepath=sys.argv[-1])
 out = {}

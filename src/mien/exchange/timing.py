@@ -18,7 +18,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from mien.errors import InvalidValueError
-from mien.facs.clip import Clip
+from mien.facs.clip import Clip, resample_on_times
 
 __all__ = ["DEFAULT_FPS", "resample", "uniform_clip"]
 
@@ -35,9 +35,7 @@ def uniform_clip(times_s: np.ndarray, values: np.ndarray, channels: Sequence[str
     if len(times) < 2:
         return Clip(data, DEFAULT_FPS, tuple(channels))
     fps = round((len(times) - 1) / float(times[-1] - times[0]), 3)
-    grid = times[0] + np.arange(len(times)) / fps
-    columns = [np.interp(grid, times, data[:, j]) for j in range(data.shape[1])]
-    return Clip(np.stack(columns, axis=1) if columns else data, fps, tuple(channels))
+    return Clip(resample_on_times(times, data, fps, n_frames=len(times)), fps, tuple(channels))
 
 
 def resample(clip: Clip, fps: float, cover_end: bool = False) -> Clip:

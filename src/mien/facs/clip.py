@@ -16,7 +16,7 @@ import numpy as np
 
 from mien.errors import InvalidValueError, UnknownNameError
 
-__all__ = ["Clip", "interpolate_frames"]
+__all__ = ["Clip", "interpolate_frames", "resample_on_times"]
 
 
 def interpolate_frames(values: np.ndarray, fps: float, times_s: np.ndarray | float) -> np.ndarray:
@@ -35,6 +35,41 @@ def interpolate_frames(values: np.ndarray, fps: float, times_s: np.ndarray | flo
     high = np.minimum(low + 1, values.shape[0] - 1)
     weight = (position - low)[..., None]
     return (1.0 - weight) * values[low] + weight * values[high]
+
+
+def resample_on_times(
+    times_s: np.ndarray, values: np.ndarray, fps: float, n_frames: int | None = None
+) -> np.ndarray:
+    """``values`` (n, ...) sampled at the real times ``times_s`` (n,) seconds -> a regular grid at ``fps``.
+
+    The grid starts at ``times_s[0]`` and steps ``1 / fps``: ``n_frames`` frames, or by default up to
+    ``times_s[-1]``. Each grid value is linearly interpolated between the two frames around it (times past
+    the end hold the last value), so a variable-frame-rate recording keeps its timing. A constant-rate
+    recording at ``fps`` comes back unchanged. Returns (m, ...) float64. The one resampler of time-stamped
+    data: video tracks (:mod:`mien.tracking.track`) and recorded files (:mod:`mien.exchange.timing`) use it.
+
+    >>> resample_on_times(np.array([0.0, 0.1, 0.4]), np.array([0.0, 1.0, 4.0]), 10.0).round(6).tolist()
+    [0.0, 1.0, 2.0, 3.0, 4.0]
+    """
+    times = np.asarray(times_s, dtype=np.float64)
+    data = np.asarray(values, dtype=np.float64)
+    if not np.isfinite(fps) or fps <= 0:
+        raise InvalidValueError("fps", fps, "a positive finite frame rate")
+    if times.ndim != 1 or data.shape[:1] != times.shape:
+        raise InvalidValueError("times_s", f"shape {times.shape}", f"(n,) matching values of shape {data.shape}")
+    if times.shape[0] < 2:
+        return data.copy()
+    if np.any(np.diff(times) <= 0):
+        raise InvalidValueError("times_s", "not increasing", "strictly increasing time stamps")
+    count = int(np.floor((times[-1] - times[0]) * fps + 1e-6)) + 1 if n_frames is None else int(n_frames)
+    grid = times[0] + np.arange(count) / fps
+    if count == times.shape[0] and np.allclose(grid, times, rtol=0.0, atol=1e-6):
+        return data.copy()
+    flat = data.reshape(times.shape[0], -1)
+    out = np.empty((count, flat.shape[1]))
+    for column in range(flat.shape[1]):
+        out[:, column] = np.interp(grid, times, flat[:, column])
+    return out.reshape((count, *data.shape[1:]))
 
 
 @dataclass(frozen=True, eq=False)

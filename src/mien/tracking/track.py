@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from mien.errors import InvalidValueError
+from mien.facs.clip import resample_on_times
 from mien.paths import cache_dir, require_asset
 from mien.progress import progress
 from mien.rig.arkit import ARKIT_NAMES
@@ -293,35 +294,6 @@ def apply_gaps(raw: Track, max_gap_s: float = MAX_GAP_S) -> Track:
     )
 
 
-def resample_on_times(times_s: np.ndarray, values: np.ndarray, fps: float) -> np.ndarray:
-    """``values`` (n, ...) sampled at the real times ``times_s`` (n,) seconds -> a regular grid at ``fps``.
-
-    The grid starts at ``times_s[0]`` and steps ``1 / fps`` up to ``times_s[-1]``; each grid value is linearly
-    interpolated between the two frames around it, so a variable-frame-rate take keeps its timing. A
-    constant-rate take at ``fps`` comes back unchanged. Returns (m, ...) float64.
-
-    >>> resample_on_times(np.array([0.0, 0.1, 0.4]), np.array([0.0, 1.0, 4.0]), 10.0).round(6).tolist()
-    [0.0, 1.0, 2.0, 3.0, 4.0]
-    """
-    times = np.asarray(times_s, dtype=np.float64)
-    data = np.asarray(values, dtype=np.float64)
-    if not np.isfinite(fps) or fps <= 0:
-        raise InvalidValueError("fps", fps, "a positive finite frame rate")
-    if times.ndim != 1 or data.shape[:1] != times.shape:
-        raise InvalidValueError("times_s", f"shape {times.shape}", f"(n,) matching values of shape {data.shape}")
-    if times.shape[0] < 2:
-        return data.copy()
-    if np.any(np.diff(times) <= 0):
-        raise InvalidValueError("times_s", "not increasing", "strictly increasing frame times")
-    count = int(np.floor((times[-1] - times[0]) * fps + 1e-6)) + 1
-    grid = times[0] + np.arange(count) / fps
-    if count == times.shape[0] and np.allclose(grid, times, rtol=0.0, atol=1e-6):
-        return data.copy()
-    flat = data.reshape(times.shape[0], -1)
-    out = np.empty((count, flat.shape[1]))
-    for column in range(flat.shape[1]):
-        out[:, column] = np.interp(grid, times, flat[:, column])
-    return out.reshape((count, *data.shape[1:]))
 
 
 @cache
