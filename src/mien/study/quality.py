@@ -15,7 +15,7 @@ The paper's intensities run 0..1 with 0 = not perceived (joy's mean over labels 
 scale but does on the zero: raw 1..5 ratings would give an all-"not at all" trial a quality of 0.1, the
 paper's scale gives it none.
 
-The paper's own figures are in ``data/broekens_table4.csv`` (:func:`paper_table4`).
+The paper's own figures are in ``mien/affect/data/broekens_table4.csv`` (:func:`paper_table4`).
 """
 
 from __future__ import annotations
@@ -106,5 +106,5 @@ def paper_table4() -> pd.DataFrame:
     """
     import pandas as pd
 
-    with resources.files("mien.study").joinpath("data/broekens_table4.csv").open("r", encoding="utf-8") as handle:
+    with resources.files("mien.affect").joinpath("data/broekens_table4.csv").open("r", encoding="utf-8") as handle:
         return pd.read_csv(handle, comment="#")

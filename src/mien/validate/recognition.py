@@ -73,19 +73,18 @@ BLEND_COMPONENTS: dict[str, tuple[str, str]] = {
 }
 """The study's blends and their components (SPEC section 3)."""
 
-HUMAN_QUALITY: dict[str, float] = {
-    "fear": 0.576,
-    "anger": 0.575,
-    "disgust": 0.372,
-    "enthusiastic": 0.263,
-    "evil": 0.467,
-    "frustrated": 0.181,
-    "furious": 0.327,
-    "joy": 0.806,
-    "sadness": 0.848,
-    "surprise": 0.592,
-}
-"""Broekens et al.'s Table 4: recognition quality by the study's 19 participants (ten labels)."""
+def _paper_quality() -> dict[str, float]:
+    import csv
+    from importlib import resources
+
+    text = resources.files("mien.affect").joinpath("data/broekens_table4.csv").read_text(encoding="utf-8")
+    rows = csv.DictReader(line for line in text.splitlines() if not line.startswith("#"))
+    return {row["expression"]: float(row["quality"]) for row in rows}
+
+
+HUMAN_QUALITY: dict[str, float] = _paper_quality()
+"""Broekens et al.'s Table 4: recognition quality by the study's 19 participants (ten labels), read from
+``mien/affect/data/broekens_table4.csv`` (the one copy; :func:`mien.study.quality.paper_table4` reads it too)."""
 
 VIEWS: dict[str, tuple[float, float]] = {
     "frontal-1m": (0.0, 1.0),
