@@ -98,14 +98,8 @@ def test_bad_requests_get_clear_errors(live, method, path, body, code, words) ->
 
 
 def test_clip_upload_plays_on_the_character(live, wait_until) -> None:
-    from mien.exchange import reader_for
     from mien.exchange.clip_json import write
     from mien.facs.clip import Clip
-
-    try:
-        reader_for("clip.json")
-    except ImportError as exc:
-        pytest.skip(f"mien.exchange cannot load its readers in this tree: {exc}")
 
     values = np.zeros((30, 1))
     values[:, 0] = 4.0
@@ -121,12 +115,26 @@ def test_clip_upload_plays_on_the_character(live, wait_until) -> None:
     assert httpx.post(url, params={"suffix": ".exe"}, content=data).status_code == 400
 
 
-def test_head_glb_route(live) -> None:
+def test_head_glb_route_matches_the_frame_weight_order(live) -> None:
+    import json
+    import struct
+
     response = httpx.get(f"{live.base_url}/api/characters/a/head.glb")
-    if response.status_code == 501:
-        assert "glb" in response.json()["detail"]
-    else:
-        assert response.status_code == 200 and response.content[:4] == b"glTF"
+    try:
+        import mien.exchange.glb  # noqa: F401
+    except ImportError:
+        assert response.status_code == 501 and "glb" in response.json()["detail"]
+        return
+    assert response.status_code == 200 and response.headers["content-type"] == "model/gltf-binary"
+    data = response.content
+    magic, version, length = struct.unpack_from("<4sII", data)
+    assert magic == b"glTF" and version == 2 and length == len(data)
+    chunk_length, chunk_type = struct.unpack_from("<I4s", data, 12)
+    assert chunk_type == b"JSON"
+    gltf = json.loads(data[20 : 20 + chunk_length])
+    names = [mesh.get("extras", {}).get("targetNames") for mesh in gltf["meshes"]]
+    info = httpx.get(f"{live.base_url}/api/characters").json()[0]
+    assert info["target_names"] in names  # the frame's weights are in the glb's targetNames order
 
 
 def test_access_token(server_factory) -> None:
