@@ -7,6 +7,8 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from mien.commands._checks import input_file, output_file, output_target
+
 if TYPE_CHECKING:
     from mien.study.design import Design
     from mien.study.storage import Store
@@ -25,7 +27,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
     def with_design(name: str, help_text: str) -> argparse.ArgumentParser:
         sub = commands.add_parser(name, help=help_text, description=help_text)
-        sub.add_argument("design", type=Path, help="the study design TOML file")
+        sub.add_argument("design", type=input_file, help="the study design TOML file")
         sub.add_argument(
             "--stimuli", type=Path, help="stimuli folder with manifest.json (default: stimuli/ next to the design)"
         )
@@ -51,14 +53,20 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
     export = with_design("export", "write the stored answers as one long CSV (one row per answered question)")
     with_db(export)
-    export.add_argument("-o", "--out", type=Path, default=Path("answers.csv"), help="CSV path (default %(default)s)")
+    export.add_argument(
+        "-o", "--out", type=output_file, default=Path("answers.csv"), help="CSV path (default %(default)s)"
+    )
     export.set_defaults(handler=run_export)
 
     analyze = with_design("analyze", "analyse the answers (quality, profiles, rm-ANOVA, plots) into an HTML report")
     with_db(analyze)
-    analyze.add_argument("--answers", type=Path, help="analyse this exported CSV instead of the database")
+    analyze.add_argument("--answers", type=input_file, help="analyse this exported CSV instead of the database")
     analyze.add_argument(
-        "-o", "--out", type=Path, default=Path("study-report"), help="report folder (default %(default)s)"
+        "-o",
+        "--out",
+        type=output_target,
+        default=Path("study-report"),
+        help="report folder, or a .html file (default %(default)s)",
     )
     analyze.set_defaults(handler=run_analyze)
 
