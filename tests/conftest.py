@@ -81,11 +81,13 @@ CHROMIUM = os.environ.get("MIEN_CHROMIUM", "/usr/bin/chromium")
 CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking"]
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def chromium() -> Iterator[object]:
     """A real headless Debian Chromium driven by Playwright (never a downloaded browser).
 
-    Yields a ``playwright.sync_api.Browser``; open pages with ``chromium.new_page()`` and close them.
+    Yields a ``playwright.sync_api.Browser``; open pages with ``chromium.new_page()`` and close them. Scoped
+    to one test module: Playwright's sync API keeps an event loop running on the main thread while it is
+    open, which would break ``asyncio.run`` in the modules after it.
     """
     playwright_api = pytest.importorskip("playwright.sync_api", reason="playwright not installed (dev extra)")
     if not Path(CHROMIUM).exists():

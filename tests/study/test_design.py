@@ -108,7 +108,8 @@ def test_cli_bad_design_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture[str
     message = capsys.readouterr().err
     assert "mien study: error:" in message and "'smug'" in message and str(path) in message
     assert main(["study", "stimuli", str(tmp_path / "missing.toml")]) == 2
-    assert "missing.toml not found" in capsys.readouterr().err
+    missing = capsys.readouterr().err
+    assert "no such file" in missing and "missing.toml" in missing and "did you mean" in missing
     broken = write(tmp_path, "[study\nname=", "broken.toml")
     assert main(["study", "serve", str(broken)]) == 2
     assert "valid UTF-8 TOML" in capsys.readouterr().err
