@@ -18,26 +18,11 @@ import argparse
 import statistics
 import tempfile
 import time
+from importlib import resources
 from pathlib import Path
 
-FULL = """
-[study]
-name = "broekens-full"
-protocol = "broekens"
-[stimuli]
-expressions = ["joy", "sadness", "anger", "fear", "surprise", "disgust",
-               "evil", "furious", "enthusiastic", "frustrated"]
-heads = ["default"]
-bases = ["facs", "feature_points"]
-views = ["frontal", "lateral"]
-distances_m = [1.0, 3.0]
-intensities = [1.2, 2.4]
-duration_s = 3.0
-fps = 30
-size = 256
-[design]
-within = ["basis", "view", "distance_m", "intensity"]
-"""
+FULL = resources.files("mien.study").joinpath("data/broekens_full.toml").read_text(encoding="utf-8")
+"""The shipped example design: the paper's 160 stimuli."""
 
 SMALL = """
 [study]

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import itertools
 from collections import Counter
+from importlib import resources
 from pathlib import Path
 
 import pytest
@@ -14,28 +15,8 @@ from mien.errors import InvalidValueError, MissingAssetError, UnknownNameError
 from mien.study.design import BROEKENS_EXPRESSIONS, load_design
 from mien.study.protocol import balanced_latin_square, participant_plan, questions
 
-FULL = """
-[study]
-name = "broekens-replication"
-protocol = "broekens"
-completion_code = "C0DE"
-redirect_url = "https://example.org/done?p={participant}"
-[stimuli]
-source = "render"
-expressions = ["joy", "sadness", "anger", "fear", "surprise", "disgust",
-               "evil", "furious", "enthusiastic", "frustrated"]
-heads = ["default"]
-bases = ["facs", "feature_points"]
-views = ["frontal", "lateral"]
-distances_m = [1.0, 3.0]
-intensities = [1.2, 2.4]
-duration_s = 3.0
-fps = 30
-size = 256
-[design]
-within = ["basis", "view", "distance_m", "intensity"]
-order = "counterbalanced"
-"""
+FULL = resources.files("mien.study").joinpath("data/broekens_full.toml").read_text(encoding="utf-8")
+"""The shipped example: the paper's full design."""
 
 
 def write(tmp_path: Path, text: str, name: str = "design.toml") -> Path:
