@@ -361,8 +361,8 @@ def create_app(server: LiveServer) -> FastAPI:
 
 
 def _read_clip(data: bytes, suffix: str) -> Any:
-    import tempfile
-    from pathlib import Path
+    """The uploaded clip file's bytes read in memory by the reader of ``suffix`` (readers take a binary stream)."""
+    import io
 
     from mien.errors import InvalidValueError
     from mien.exchange import reader_for
@@ -375,12 +375,11 @@ def _read_clip(data: bytes, suffix: str) -> Any:
         raise
     except ImportError as exc:
         raise InvalidValueError("suffix", suffix, f"a clip format this install can read ({exc})") from None
-    with tempfile.TemporaryDirectory() as folder:
-        path = Path(folder) / f"clip{suffix}"
-        path.write_bytes(data)
-        try:
-            return reader(path)
-        except MienError:
-            raise
-        except Exception as exc:  # a reader's own parse error on garbage bytes
-            raise InvalidValueError("clip", f"{len(data)} bytes", f"a readable {suffix} clip ({exc})") from None
+    stream = io.BytesIO(data)
+    stream.name = f"uploaded clip{suffix}"
+    try:
+        return reader(stream)
+    except MienError:
+        raise
+    except Exception as exc:  # a reader's own parse error on garbage bytes
+        raise InvalidValueError("clip", f"{len(data)} bytes", f"a readable {suffix} clip ({exc})") from None
