@@ -94,3 +94,25 @@ def test_disgust_shows_its_facs_signs(ict_frontal: RecognitionResult) -> None:
         # upper-lip raiser seen by the detector, and the nose-to-lip distance shortened on the mesh
         assert score.aus["AU10"] > max(s.aus["AU10"] for s in neutral) + 0.5
         assert score.nose_lip_mm < lip_neutral - 1.0
+
+
+def test_facs_reading_matches_prototypes() -> None:
+    from mien.facs.catalogue import OPENFACS_AUS
+    from mien.facs.prototypes import EMFACS_PROTOTYPES
+    from mien.validate.recognition import facs_reading
+
+    aus = tuple(OPENFACS_AUS)
+    neutral = np.full(len(aus), 0.3)
+    for name, prototype in EMFACS_PROTOTYPES.items():
+        face = neutral + np.array([prototype.get(f"AU{code}", 0.0) for code in aus]) * 0.8
+        assert facs_reading(face, neutral, aus) == name
+    assert facs_reading(neutral, neutral, aus) is None  # nothing moved: no reading
+    anger = np.array([EMFACS_PROTOTYPES["anger"].get(f"AU{code}", 0.0) for code in aus])
+    assert facs_reading(anger + 0.4 * np.random.default_rng(0).random(len(aus)), np.zeros(len(aus)), aus) == "anger"
+
+
+def test_disgust_is_not_read_as_anger_by_its_facs_signs(ict_frontal: RecognitionResult) -> None:
+    # the classifier answers "disgust" for almost nothing; the FACS reading tells disgust from anger
+    assert ict_frontal.facs_rate(expression="disgust") >= 0.75
+    assert ict_frontal.facs_rate("anger", expression="disgust") == 0.0
+    assert ict_frontal.facs_rate(expression="anger") >= 0.75

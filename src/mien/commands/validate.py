@@ -199,11 +199,17 @@ def run_emotions(args: argparse.Namespace) -> int:
     result = emotions_result(args, heads)
     written = write_recognition(result, args.out)
     basics = ("joy", "sadness", "anger", "surprise", "fear")
-    print(f"recognised (top label; blends: top two) over {len(result.scores)} renders:")
+    print(f"recognised (top label; blends: top two) over {len(result.scores)} renders, and the FACS reading:")
     for name in ("neutral", *EXPRESSIONS):
-        print(f"  {name:13s} {result.rate(expression=name):6.0%}   quality {result.quality(name):.2f}")
+        facs = "" if name == "neutral" else f"   FACS reading {result.facs_rate(expression=name):4.0%}"
+        print(f"  {name:13s} {result.rate(expression=name):6.0%}   quality {result.quality(name):.2f}{facs}")
     frontal = result.rate(expression=basics, view=("frontal-1m", "frontal-3m"))
     print(f"joy, sadness, anger, surprise, fear, frontal: {frontal:.0%}")
+    if result.subset(expression="disgust"):
+        disgust = result.subset(expression="disgust")
+        by_classifier = sum(s.top == "angry" for s in disgust) / len(disgust)
+        by_facs = result.facs_rate("anger", expression="disgust")
+        print(f"disgust taken for anger: classifier {by_classifier:.0%}, FACS reading {by_facs:.0%}")
     print(f"wrote {len(written)} files to {args.out} (recognition.json, sheet_*.png, confusion.png, quality.png)")
     return 0
 

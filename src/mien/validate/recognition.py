@@ -18,7 +18,13 @@ Metrics, per expression over all renders:
 * disgust's FACS signs: AU9 (nose wrinkler) and AU10 (upper-lip raiser) estimated from the detected
   blendshapes (:class:`~mien.validate.au_solve.AUSolver`) against the same head's neutral, and the
   geometric shortening of the nose-to-upper-lip distance on the rendered mesh (iBUG landmarks 33 -> 51),
-  because the shipped classifier almost never answers "disgust" and cannot be the judge of it.
+  because the shipped classifier almost never answers "disgust" and cannot be the judge of it;
+* the FACS reading (:attr:`StimulusScore.facs_top`): a second judge that reads the face as a FACS coder would.
+  The 18 OpenFACS AUs are estimated from the detected blendshapes, the same head, basis and view's neutral is
+  subtracted (clipped at 0), and the emotion whose EMFACS prototype (:mod:`mien.facs.prototypes`) has the
+  largest cosine similarity with what was detected is the reading. It tells disgust from anger by their signs
+  (AU9/AU10/AU15/AU17 against AU4/AU5/AU7/AU23 and the open mouth) where the classifier cannot. It needs the
+  detector's blendshapes; without them (or for a neutral face, or when nothing moved) it is None.
 """
 
 from __future__ import annotations
@@ -44,6 +50,7 @@ __all__ = [
     "RecognitionResult",
     "Stimulus",
     "StimulusScore",
+    "facs_reading",
     "peak_face",
     "run_recognition",
     "study_stimuli",
@@ -72,6 +79,7 @@ BLEND_COMPONENTS: dict[str, tuple[str, str]] = {
     "evil": ("joy", "anger"),
 }
 """The study's blends and their components (SPEC section 3)."""
+
 
 def _paper_quality() -> dict[str, float]:
     import csv
@@ -133,6 +141,9 @@ class StimulusScore:
     """Detected AU intensities (``"AU9"`` -> 0..5) when the detector gives blendshapes."""
     nose_lip_mm: float = float("nan")
     """Nose-base to upper-lip-top distance on the rendered mesh, millimetres (iBUG 33 -> 51)."""
+    facs_top: str | None = None
+    """The FACS reading: the emotion whose EMFACS prototype best matches the AUs detected above the same
+    setup's neutral (see the module docstring); None without blendshapes, for neutral, or when nothing moved."""
 
     @property
     def top(self) -> str:
@@ -241,6 +252,18 @@ class RecognitionResult:
         judged = [float(j) for j in (s.correct() for s in self.subset(**conditions)) if j is not None]
         return float(np.mean(judged)) if judged else float("nan")
 
+    def facs_rate(self, read_as: str | None = None, **conditions: Any) -> float:
+        """Share of matching stimuli whose FACS reading is ``read_as`` (default: each one's own expression; a
+        blend counts when the reading is one of its components); nan when none has a reading."""
+        judged = []
+        for score in self.subset(**conditions):
+            if score.facs_top is None:
+                continue
+            name = score.stimulus.expression
+            wanted = {read_as} if read_as is not None else set(BLEND_COMPONENTS.get(name, (name,)))
+            judged.append(score.facs_top in wanted)
+        return float(np.mean(judged)) if judged else float("nan")
+
     def quality(self, expression: str, **conditions: Any) -> float:
         """Machine quality (mean probability of the target label) of a basic emotion; nan for blends."""
         if expression not in LABEL_OF:
@@ -273,11 +296,13 @@ class RecognitionResult:
                     "face_found": s.face_found,
                     "aus": {k: round(v, 3) for k, v in s.aus.items()},
                     "nose_lip_mm": None if not np.isfinite(s.nose_lip_mm) else round(s.nose_lip_mm, 3),
+                    "facs_top": s.facs_top,
                 }
                 for s in self.scores
             ],
             "recognition": {e: self.rate(expression=e) for e in ("neutral", *EXPRESSIONS)},
             "quality": {e: {"machine": self.quality(e), "human": HUMAN_QUALITY.get(e)} for e in EXPRESSIONS},
+            "facs_reading": {e: self.facs_rate(expression=e) for e in EXPRESSIONS},
             "confusion": {"rows": rows, "matrix": matrix.tolist()},
             "timings_s": self.timings_s,
         }
@@ -295,6 +320,51 @@ def _json_default(value: object) -> object:
     if isinstance(value, np.generic):
         return value.item()
     raise TypeError(f"not JSON serialisable: {type(value).__name__}")
+
+
+def facs_reading(detected: np.ndarray, neutral: np.ndarray, aus: Sequence[int]) -> str | None:
+    """The emotion whose EMFACS prototype best matches AUs ``detected`` above ``neutral`` (cosine similarity).
+
+    ``detected`` / ``neutral``: (len(aus),) AU intensities 0..5 of the face and of the same setup's neutral, over
+    AU numbers ``aus``. None when nothing rose above the neutral (by more than 0.05 in total).
+
+    >>> aus = (1, 2, 4, 5, 9, 10, 15, 17, 26)
+    >>> face = np.array([0, 0, 0, 0, 1.0, 3.5, 2.5, 3.0, 0])
+    >>> facs_reading(face, np.zeros(9), aus)
+    'disgust'
+    """
+    from mien.facs.prototypes import EMFACS_PROTOTYPES
+
+    rise = np.clip(np.asarray(detected, np.float64) - np.asarray(neutral, np.float64), 0.0, None)
+    if rise.sum() <= 0.05:
+        return None
+    names = tuple(EMFACS_PROTOTYPES)
+    table = np.array([[EMFACS_PROTOTYPES[n].get(f"AU{code}", 0.0) for code in aus] for n in names])
+    norms = np.linalg.norm(table, axis=1) * np.linalg.norm(rise)
+    cosine = table @ rise / np.where(norms > 0, norms, 1.0)
+    return names[int(np.argmax(cosine))]
+
+
+def _with_facs_readings(scores: Sequence[StimulusScore], aus: Sequence[int]) -> tuple[StimulusScore, ...]:
+    """``scores`` with :attr:`StimulusScore.facs_top` set against each setup's neutral (zeros where none)."""
+    from dataclasses import replace
+
+    def vector(score: StimulusScore) -> np.ndarray:
+        return np.array([score.aus.get(f"AU{code}", 0.0) for code in aus])
+
+    def setup(score: StimulusScore) -> tuple[str, str, str, str]:
+        s = score.stimulus
+        return s.head, s.identity, s.basis, s.view
+
+    neutrals = {setup(s): vector(s) for s in scores if s.stimulus.expression == "neutral" and s.aus}
+    out = []
+    for score in scores:
+        if score.stimulus.expression == "neutral" or not score.aus:
+            out.append(score)
+            continue
+        base = neutrals.get(setup(score), np.zeros(len(aus)))
+        out.append(replace(score, facs_top=facs_reading(vector(score), base, aus)))
+    return tuple(out)
 
 
 def _judged_crop(rgb: np.ndarray, landmarks: np.ndarray, side: int = 160) -> np.ndarray:
@@ -324,7 +394,7 @@ def run_recognition(
     own = detector is None
     active: Detector = FaceDetector() if detector is None else detector
     timings = {"load": 0.0, "render": 0.0, "detect": 0.0}
-    solver = AUSolver(aus=(9, 10))
+    solver = AUSolver()  # the 18 OpenFACS AUs: AU9/AU10 for disgust's signs, all of them for the FACS reading
     scores: list[StimulusScore | None] = [None] * len(stimuli)
     images: dict[int, np.ndarray] = {}
     groups: dict[tuple[str, str, str, str], list[int]] = {}
@@ -374,7 +444,7 @@ def run_recognition(
             active.close()
     for _ in ticker:
         pass
-    done = tuple(s for s in scores if s is not None)
+    done = _with_facs_readings([s for s in scores if s is not None], solver.aus)
     return RecognitionResult(done, active.name, {k: round(v, 3) for k, v in timings.items()}, images)
 
 

@@ -74,7 +74,10 @@ def _emotions_section(result: Any, folder: Path) -> str:
 
     groups = sorted({(s.stimulus.head, s.stimulus.identity, s.stimulus.basis) for s in result.scores})
     views = sorted({s.stimulus.view for s in result.scores})
-    header = ["expression", "all", *[f"{h}:{i} {b}" for h, i, b in groups], *views, "quality", "people (Table 4)"]
+    header = [
+        "expression", "all", *[f"{h}:{i} {b}" for h, i, b in groups], *views, "quality", "people (Table 4)",
+        "FACS reading",
+    ]  # fmt: skip
     rows = []
     for name in ("neutral", *EXPRESSIONS):
         rows.append(
@@ -85,6 +88,7 @@ def _emotions_section(result: Any, folder: Path) -> str:
                 *[_pct(result.rate(expression=name, view=v)) for v in views],
                 _num(result.quality(name)),
                 _num(HUMAN_QUALITY.get(name, float("nan"))),
+                "" if name == "neutral" else _pct(result.facs_rate(expression=name)),
             ]
         )
     basics = ("joy", "sadness", "anger", "surprise", "fear")
@@ -98,7 +102,10 @@ def _emotions_section(result: Any, folder: Path) -> str:
         f"<p>{len(result.scores)} renders classified by <code>{html.escape(result.detector)}</code>. Recognised = "
         "the classifier's top label is the expression's (blends: its two top labels are the blend's components). "
         "Quality = the mean probability of the target label (Broekens' metric target / (mean over labels x "
-        "labels) with probabilities that sum to 1); the people's values are the study's, over ten labels.</p>",
+        "labels) with probabilities that sum to 1); the people's values are the study's, over ten labels. FACS "
+        "reading = share whose detected AUs (above the same setup's neutral) best match the expression's EMFACS "
+        "prototype (a blend: one of its components), the judge for disgust, which the classifier almost never "
+        "names.</p>",
         "<ul>",
         "<li>joy, sadness, anger, surprise, fear, frontal (target 90%): "
         f"<b>{_pct(result.rate(expression=basics, view=frontal))}</b></li>",
@@ -106,7 +113,9 @@ def _emotions_section(result: Any, folder: Path) -> str:
         f"<li>the same in the 90-degree profile (crop from the rig's projected landmarks): "
         f"<b>{_pct(result.rate(expression=basics, view=lateral))}</b></li>",
         f"<li>neutral reads neutral: <b>{_pct(result.rate(expression='neutral'))}</b>; disgust taken for anger: "
-        f"<b>{_pct(took_anger)}</b></li>",
+        f"<b>{_pct(took_anger)}</b> by the classifier, <b>{_pct(result.facs_rate('anger', expression='disgust'))}"
+        "</b> by the FACS reading (disgust read as disgust by its FACS signs: "
+        f"<b>{_pct(result.facs_rate(expression='disgust'))}</b>)</li>",
         "</ul>",
         _table(header, rows),
     ]
