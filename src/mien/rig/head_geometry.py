@@ -257,7 +257,7 @@ def _relief(x: np.ndarray, yd: np.ndarray, shape: HeadShape) -> np.ndarray:
     """Forward depth offset (m) of the facial relief at frontal design position (x, yd)."""
     ax = np.abs(x)
     ym = Y_MOUTH_D
-    z = 0.004 * gauss(ax, yd, 0.029, BROW_Y_D + 0.001, 0.020, 0.007)  # brow ridge
+    z = 0.004 * gauss(ax, yd, 0.029, 0.016, 0.020, 0.007)  # brow ridge (supraorbital rim)
     z += 0.002 * gauss(x, yd, 0.0, 0.016, 0.010, 0.010)  # glabella
     z += 0.006 * gauss(ax, yd, 0.040, -0.032, 0.014, 0.015)  # cheekbones
     z -= 0.003 * gauss(ax, yd, 0.052, -0.002, 0.010, 0.014)  # temples / outer orbit
@@ -517,9 +517,14 @@ def build_head_mesh(shape: HeadShape) -> HeadMesh:
         np.where(
             alpha[:, None] < 0.46,
             iris * (0.75 + 0.25 * ring[:, None]),
-            np.where(alpha[:, None] < 0.53, iris * 0.35, srgb_to_linear((0.93, 0.91, 0.88))),
+            np.where(alpha[:, None] < 0.53, iris * 0.35, srgb_to_linear((0.90, 0.87, 0.84))),
         ),
     )
+    # Painted occlusion: the lids and the socket shade the white toward the corners, and the upper lid and
+    # lashes shade the top of the eye, so the white does not glow as bright wedges (a staring look).
+    toward_corner = smoothstep(0.55, 1.05, alpha)[:, None]
+    eye_col = eye_col * (1.0 - 0.55 * toward_corner) * (1.0 - 0.15 * toward_corner * np.array([0.0, 1.0, 1.0]))
+    eye_col = eye_col * (1.0 - 0.40 * smoothstep(0.05, 0.40, unit[:, 1]))[:, None]
     for part, c in ((EYE_L, centers[0]), (EYE_R, centers[1])):
         pts = c + unit * shape.eye_radius_m
         b.add(pts, sphere_faces, eye_col, part, pts[:, :2])
@@ -528,7 +533,7 @@ def build_head_mesh(shape: HeadShape) -> HeadMesh:
     ym = shape.y_mouth
     z_lips = float(skin_v[m_up[k // 2], 2])
     unit, sphere_faces = _unit_sphere(12, 20)
-    cav = unit * np.array([mw * 1.2, 0.015 * shape.lower_face_scale, 0.019]) + [0, ym - 0.001, z_lips - 0.025]
+    cav = unit * np.array([mw * 1.45, 0.016 * shape.lower_face_scale, 0.021]) + [0, ym - 0.001, z_lips - 0.026]
     dark = srgb_to_linear((0.22, 0.06, 0.07))
     b.add(cav, sphere_faces[:, ::-1], dark, CAVITY, cav[:, :2])
 
@@ -661,7 +666,7 @@ def _dental_row(
             # darker toward the back of the mouth and toward the gum (light reaches the front edges)
             depth = (x_mid / half_width) ** 2
             toward_gum = np.clip((v[:, 1] - edge) / height * (1 if upper else -1), 0.0, 1.0)
-            shade = (1.0 - 0.45 * depth) * (1.0 - 0.25 * toward_gum)
+            shade = (1.0 - 0.65 * depth) * (1.0 - 0.25 * toward_gum)
             col.append(ivory[None, :] * shade[:, None])
             n += len(v)
     return np.vstack(pts), np.vstack(tri), np.vstack(col)

@@ -148,9 +148,14 @@ def arkit_deltas(mesh: HeadMesh) -> dict[str, np.ndarray]:
     # --- jaw ---
     jaw = jaw_weights(mesh)
     hinge = np.array([0.0, float(shape.y(-0.02)), -0.075])
-    jaw_open = _rot_x(v, hinge, -JAW_OPEN_RAD * jaw) - v
+    # The lower lip is soft: its share of the jaw's turn falls off toward the corners (an ellipse across the
+    # mouth), so the lips part as an oval, not a rectangle with a flat bottom.
+    lip_band = low * front * np.exp(-0.5 * ((yd - ym) / 0.010) ** 2)
+    ellipse = np.sqrt(np.clip(1.0 - (x / (mw * 1.15)) ** 2, 0.0, 1.0))
+    jaw_lip = jaw * (1.0 - lip_band * (1.0 - ellipse))
+    jaw_open = _rot_x(v, hinge, -JAW_OPEN_RAD * jaw_lip) - v
     # The condyle also slides forward as the jaw opens, so the chin goes mostly down, less back.
-    out["jawOpen"] = jaw_open + vec(jaw, (0.0, 0.0, 0.012))
+    out["jawOpen"] = jaw_open + vec(jaw_lip, (0.0, 0.0, 0.012))
     # A dropping jaw draws the lip corners in and down (the opening becomes an oval, not a wide slit).
     # The upper lip follows less than the lower one: its middle stays put.
     for sgn in (1.0, -1.0):
@@ -187,12 +192,34 @@ def arkit_deltas(mesh: HeadMesh) -> dict[str, np.ndarray]:
     out["mouthRollUpper"] = vec(verm_up, (0.0, -0.0015, -0.0040))
     out["mouthShrugLower"] = vec(low * front * gauss(x, yd, 0.0, -0.094, 0.018, 0.017), (0.0, 0.0035, 0.0025))
     out["mouthShrugUpper"] = vec((1.0 - low) * front * gauss(x, yd, 0.0, ym + 0.004, 0.020, 0.008), (0, 0.0025, 0.001))
+    # Smile: the zygomatic major draws the corner up and out; the stretched upper lip rides up over the teeth
+    # toward the corners, and the cheek lateral to the nasolabial furrow (ala to ~1 cm beyond the corner)
+    # bunches up and forward, deepening the furrow (FACS Manual, AU12: "deepens the nasolabial furrow").
+    ala = np.array([0.019, -0.046])
+    beyond = np.array([mw + 0.009, ym - 0.011])
+    along = (beyond - ala) / np.linalg.norm(beyond - ala)
+    rel_x, rel_y = np.abs(x) - ala[0], yd - ala[1]
+    lateral = rel_x * -along[1] + rel_y * along[0]  # signed distance from the furrow line, + toward the cheek
+    s_line = np.clip(rel_x * along[0] + rel_y * along[1], -0.01, 0.06)
+    nasolabial_w = (
+        front
+        * (1.0 - low)
+        * smoothstep(-0.0005, 0.0045, lateral)
+        * np.exp(-0.5 * (np.maximum(lateral - 0.004, 0.0) / 0.012) ** 2)
+        * smoothstep(-0.004, 0.006, s_line)
+        * (1.0 - smoothstep(0.030, 0.045, s_line))
+    )
+    smile_lip = smoothstep(0.2 * mw, 0.8 * mw, np.abs(x))
     for suffix, sgn in (("Left", 1.0), ("Right", -1.0)):
         corner = front * gauss(x, yd, sgn * mw, ym, 0.011, 0.010)
         half = 0.5 * (1.0 + np.tanh(sgn * x / 0.006))
+        nasolabial = nasolabial_w * half
         cheek = front * gauss(x, yd, sgn * 0.035, -0.045, 0.013, 0.013)
-        out[f"mouthSmile{suffix}"] = vec(corner, (sgn * 0.006, 0.0085, -0.003)) + vec(
-            cheek, (sgn * 0.001, 0.003, 0.002)
+        out[f"mouthSmile{suffix}"] = (
+            vec(corner, (sgn * 0.0075, 0.0080, -0.003))
+            + vec(cheek, (sgn * 0.001, 0.003, 0.002))
+            + vec(upper_lip * half * smile_lip, (0.0, 0.0018, -0.0008))
+            + vec(nasolabial, (sgn * 0.0008, 0.0025, 0.0028))
         )
         out[f"mouthFrown{suffix}"] = vec(corner, (sgn * 0.0015, -0.007, 0.0))
         out[f"mouthDimple{suffix}"] = vec(corner, (sgn * 0.0035, 0.001, -0.0045))
@@ -206,19 +233,38 @@ def arkit_deltas(mesh: HeadMesh) -> dict[str, np.ndarray]:
         out[f"mouthUpperUp{suffix}"] = vec(upper_lip * half, (0.0, 0.0055, 0.0008))
 
     # --- brows (kept off the eyelids by the eye slits' side fields) ---
+    # The brow moves as a band: rigid within 3 mm of its painted line, the forehead above following over ~2 cm
+    # and the lid fold below over ~7 mm. Along the brow, AU1's (browInnerUp) share fades out as AU2's
+    # (browOuterUp) fades in, the two summing to one, so raising both lifts the whole brow into a higher, rounder
+    # arch (surprise) instead of a wavy, oblique line (inner alone stays oblique: sadness). Frontalis' medial
+    # and lateral bellies: Ekman, Friesen & Hager (2002), FACS Manual ch. 3, AU1 and AU2.
+    def brow_band(eye: int, s_up: float = 0.020, s_down: float = 0.0065) -> np.ndarray:
+        dy = yd - brow_line(x)
+        d = np.sign(dy) * np.maximum(np.abs(dy) - 0.003, 0.0)
+        sy = np.where(d >= 0, s_up, s_down)
+        return front * mesh.upper_lid_side[:, eye] * np.exp(-0.5 * (d / sy) ** 2)
+
+    t_brow = (np.abs(x) - 0.012) / 0.044  # 0 at the brow's inner end, 1 at its tail (as brow_line)
+    to_tail = smoothstep(0.15, 0.85, t_brow)
+    lateral_fade = 1.0 - smoothstep(1.0, 1.6, t_brow)
+    inner_share = (1.0 - to_tail) * (0.55 + 0.45 * smoothstep(0.0, 0.012, np.abs(x)))
+    outer_share = (to_tail + 0.25 * np.exp(-0.5 * ((t_brow - 0.6) / 0.2) ** 2)) * lateral_fade
+    left_half = 0.5 * (1.0 + np.tanh(x / 0.004))
+    inner = brow_band(0) * left_half + brow_band(1) * (1.0 - left_half)
+    out["browInnerUp"] = vec(inner * inner_share, (0.0, 0.012, 0.0005))
+
     def brow(cx: float, cy: float, sx: float, eye: int) -> np.ndarray:
         return front * mesh.upper_lid_side[:, eye] * _gauss_asym(x, yd, cx, cy, sx, 0.02, 0.0065)
 
-    inner_y, mid_y, outer_y = (float(brow_line(bx)) for bx in (0.017, 0.031, 0.046))
-    inner = brow(0.017, inner_y, 0.010, 0) + brow(-0.017, inner_y, 0.010, 1)
-    out["browInnerUp"] = vec(inner, (0.0, 0.012, 0.0005))
+    inner_y, mid_y = (float(brow_line(bx)) for bx in (0.017, 0.031))
     for suffix, sgn, eye in (("Left", 1.0, 0), ("Right", -1.0, 1)):
         whole = brow(sgn * 0.031, mid_y, 0.019, eye)
         inner_side = brow(sgn * 0.017, inner_y, 0.010, eye)
         out[f"browDown{suffix}"] = vec(whole, (-sgn * 0.0035, -0.0060, 0.0015)) + vec(
             inner_side, (-sgn * 0.002, -0.001, 0.001)
         )
-        out[f"browOuterUp{suffix}"] = vec(brow(sgn * 0.046, outer_y, 0.012, eye), (0.0, 0.011, 0.0))
+        side = 0.5 * (1.0 + np.tanh(sgn * x / 0.004))
+        out[f"browOuterUp{suffix}"] = vec(brow_band(eye) * side * outer_share, (0.0, 0.011, 0.0))
 
     # --- cheeks and nose ---
     ax = np.abs(x)
