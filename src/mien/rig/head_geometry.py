@@ -588,7 +588,7 @@ def build_head_mesh(shape: HeadShape) -> HeadMesh:
         colors[lid_flap_ids[2 * e]] = lash
 
     lower_side = np.zeros(len(vertices))
-    lower_side[:skin_n] = _side_field(skin_m[:, 0], skin_m[:, 1], Y_MOUTH_D, mw, 0.5, 0.0, below=True)
+    lower_side[:skin_n] = _side_field(skin_m[:, 0], skin_m[:, 1], Y_MOUTH_D, mw, 1.2, 0.0, below=True)
     lower_side[mouth_lower_ids] = 1.0
     lower_side[grid[i_mouth, mouth_cols]] = 0.0
     for rows_, value in ((up_rows[1:], 0.0), (lo_rows[:-1], 1.0)):

@@ -157,9 +157,11 @@ def arkit_deltas(mesh: HeadMesh) -> dict[str, np.ndarray]:
     # The condyle also slides forward as the jaw opens, so the chin goes mostly down, less back.
     out["jawOpen"] = jaw_open + vec(jaw_lip, (0.0, 0.0, 0.012))
     # A dropping jaw draws the lip corners in and down (the opening becomes an oval, not a wide slit).
-    # The upper lip follows less than the lower one: its middle stays put.
+    # The upper lip's outer part bends down with the corners (rounded ends, not a flat top with square
+    # corners); its middle stays put.
+    upper_follow = 0.85 * smoothstep(0.35 * mw, 0.75 * mw, np.abs(x))
     for sgn in (1.0, -1.0):
-        corner = front * gauss(x, yd, sgn * mw, ym, 0.008, 0.011) * (0.4 + 0.6 * low)
+        corner = front * gauss(x, yd, sgn * mw, ym, 0.008, 0.011) * (low + (1.0 - low) * upper_follow)
         out["jawOpen"] += vec(corner, (-sgn * 0.0070, -0.0060, 0.0))
     out["jawForward"] = vec(jaw, (0.0, 0.0, 0.006))
     out["jawLeft"] = vec(jaw, (0.008, 0.0, 0.0))
