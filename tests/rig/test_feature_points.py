@@ -66,7 +66,8 @@ def test_anchor_sides_and_weights(head: tuple[Rig, FeaturePointRig]) -> None:
             j = FEATURE_NAMES.index(name.replace("Left", "Right"))
             assert p[j, 0] < -0.005 and abs(p[i, 0] + p[j, 0]) < 2e-3 and abs(p[i, 1] - p[j, 1]) < 2e-3, name
         w = fp.weights(name, rig.n_vertices)
-        assert w[fp.anchors[i]] == 1.0 and w.max() == 1.0 and w.min() >= 0.0
+        # the smoothest field through the anchors overshoots a little beyond a held neighbour
+        assert w[fp.anchors[i]] == 1.0 and 1.0 <= w.max() < 1.05 and w.min() > -0.25
     y = dict(zip(FEATURE_NAMES, p[:, 1], strict=True))
     assert y["BrowInnerLeft"] > y["LidUpperLeft"] > y["LidLowerLeft"] > y["CheekLeft"] > y["Nostrils"]
     assert y["Nostrils"] > y["LipUpperLeft"] > y["LipLowerLeft"] > y["Jaw"]
@@ -82,15 +83,9 @@ def test_compiled_targets_are_unit_moves(head: tuple[Rig, FeaturePointRig]) -> N
     assert np.all(dense[:, [0, 2]] == 0.0)
 
 
-def limited(spec_index: int, axis: int) -> bool:
-    """Whether the rig strain-limits feature ``spec_index``'s rig-axis ``axis`` (a move toward a barrier; the
-    targets are linear, so the move away from it is limited alike)."""
-    spec = feature_specs()[spec_index]
-    return (bool(spec.toward) and "xyz".index(spec.toward[1]) == axis) or (spec.medial and axis == 0)
-
-
 def test_anchor_moves_exactly_by_the_vector(head: tuple[Rig, FeaturePointRig]) -> None:
-    """Free moves are exact (twice the intensity, twice the move); moves toward a barrier go the same way, less far."""
+    """The compiled targets are exact: each feature alone moves its anchor by its vector (twice the intensity,
+    twice the move); the driver's limits toward barriers come on top (see test_driver_limits_...)."""
     rig, fp = head
     for emotion in ("happy", "surprise", "angry", "disgust", "sad", "fear"):
         vectors = table1(emotion)
@@ -99,14 +94,10 @@ def test_anchor_moves_exactly_by_the_vector(head: tuple[Rig, FeaturePointRig]) -
             alone[f] = vectors[f]
             d = deform(rig, table1_weights(alone, 1.2))
             z, x, y = vectors[f]
-            want = 1.2 * np.array([x, -y, z])
-            got = d[fp.anchors[f]]
-            for a in range(3):
-                if limited(f, a) and want[a] != 0:
-                    assert 0.05 * abs(want[a]) < got[a] * np.sign(want[a]) <= abs(want[a]) + 1e-6, (emotion, name, a)
-                else:
-                    np.testing.assert_allclose(got[a], want[a], atol=1e-6, err_msg=f"{emotion} {name} {a}")
-        d = deform(rig, table1_weights(vectors, 1.2))  # overlapping regions add up, as in the paper
+            np.testing.assert_allclose(
+                d[fp.anchors[f]], 1.2 * np.array([x, -y, z]), atol=1e-6, err_msg=f"{emotion} {name}"
+            )
+        d = deform(rig, table1_weights(vectors, 1.2))  # the fields add up
         np.testing.assert_allclose(fp.displacement(vectors, 1.2, rig.n_vertices), d, atol=1e-6)
 
 
@@ -121,8 +112,8 @@ def test_happy_lifts_both_corners_outward(head: tuple[Rig, FeaturePointRig]) -> 
 def test_surprise_raises_brows_and_drops_jaw(head: tuple[Rig, FeaturePointRig]) -> None:
     rig, _ = head
     d = deform(rig, table1_weights(table1("surprise"), 1.0))
-    for brow in (17, 21, 22, 26):  # strain-limited over the lids: less than the 5 mm of Table 1
-        assert d[rig.landmarks[brow], 1] > 0.002
+    for brow in (17, 21, 22, 26):  # 5 mm up in Table 1; the landmarks sit near the anchors
+        assert d[rig.landmarks[brow], 1] > 0.003
     assert d[rig.landmarks[8], 1] < -0.009
     assert d[rig.landmarks[57], 1] < -0.005  # the lower lip goes with the jaw: the mouth opens
     assert abs(d[rig.landmarks[51], 1]) < 0.0025
@@ -131,9 +122,8 @@ def test_surprise_raises_brows_and_drops_jaw(head: tuple[Rig, FeaturePointRig]) 
 def test_angry_pulls_inner_brows_together_and_down(head: tuple[Rig, FeaturePointRig]) -> None:
     rig, _ = head
     d = deform(rig, table1_weights(table1("angry"), 1.0))
-    # strain-limited toward the midline and the lids: at most half the neutral gap closes at intensity 2.4
-    assert d[rig.landmarks[22], 0] < -0.002 < 0.002 < d[rig.landmarks[21], 0]
-    assert d[rig.landmarks[22], 1] < -0.002
+    assert d[rig.landmarks[22], 0] < -0.005 < 0.005 < d[rig.landmarks[21], 0]
+    assert d[rig.landmarks[22], 1] < -0.005
 
 
 def test_regions_respect_mouth_and_lids(head: tuple[Rig, FeaturePointRig]) -> None:
@@ -143,8 +133,9 @@ def test_regions_respect_mouth_and_lids(head: tuple[Rig, FeaturePointRig]) -> No
     for name in ("LipUpperLeft", "LipUpperRight", "Nostrils"):
         assert fp.weights(name, rig.n_vertices)[lower_lip].max() < 0.02, name
     for name in ("LipLowerLeft", "LipLowerRight", "Jaw"):
-        central = upper_lip[np.abs(rig.neutral[upper_lip, 0]) < 0.015]
-        assert fp.weights(name, rig.n_vertices)[central].max() < 0.02, name
+        # the corners ride the jaw by half, so the upper lip near them follows a little; its middle does not
+        central = upper_lip[np.abs(rig.neutral[upper_lip, 0]) < 0.008]
+        assert np.abs(fp.weights(name, rig.n_vertices)[central]).max() < 0.1, name
     for side in ("Left", "Right"):
         letter = side[0]
         assert fp.weights(f"LidUpper{side}", rig.n_vertices)[rig.regions[f"lower_lid_{letter}"]].max() < 0.02
@@ -235,7 +226,7 @@ def expression_vertices(rig: Rig, fp: FeaturePointRig, name: str, intensity: flo
     from mien.affect.table1 import table1_vectors
 
     vectors = np.tensordot(emotion_vector(name, intensity), table1_vectors(), axes=1)
-    return rig.neutral + fp.displacement(vectors, 1.0, rig.n_vertices)
+    return rig.neutral + fp.displacement(vectors, 1.0, rig.n_vertices, limited=True)
 
 
 def study_heads(ict_dir: Path | None) -> list[Rig]:
@@ -256,7 +247,8 @@ def study_head(request: pytest.FixtureRequest) -> list[Rig]:
 
 
 def test_edge_strain_within_the_heads_own_shapes(study_head: list[Rig]) -> None:
-    """At the study's top intensity no expression stretches an edge more than twice the worst ARKit shape."""
+    """At the study's top intensity (moves limited as the driver shows them) no expression stretches an edge more
+    than twice the worst ARKit shape."""
     from mien.rig.mesh_quality import max_edge_strain, max_target_strain
 
     for rig in study_head:
@@ -266,7 +258,6 @@ def test_edge_strain_within_the_heads_own_shapes(study_head: list[Rig]) -> None:
             assert max_edge_strain(rig, expression_vertices(rig, fp, name, 2.4)) <= 2.0 * bound, (rig.name, name)
 
 
-@pytest.mark.xfail(strict=True, reason="open: Table 1 at 2.4 still turns skin triangles over (see report)")
 def test_no_triangle_flips(study_head: list[Rig]) -> None:
     """No skin triangle turns over, the slivers the head's own jawOpen/mouthClose/eyeBlink fold excepted."""
     from mien.rig.mesh_quality import flipped_triangles, fragile_faces, region_faces
@@ -288,3 +279,45 @@ def test_mesh_quality_measures() -> None:
     assert 0.0 < edge_strain(rig, stretched).max() <= 0.5 + 1e-6
     mirrored = rig.neutral * np.array([-1.0, 1.0, 1.0], np.float32)
     assert flipped_triangles(rig, mirrored).size > 0 and flipped_triangles(rig, stretched).size == 0
+
+
+def test_driver_limits_moves_toward_barriers_only(head: tuple[Rig, FeaturePointRig]) -> None:
+    """Moves toward a barrier approach room x gap; moves away and free moves stay exact (2x intensity, 2x move)."""
+    from mien.rig.driver import RigDriver
+    from mien.rig.feature_points import feature_rooms, limit_moves
+
+    rig, fp = head
+    rooms = feature_rooms(rig)
+    np.testing.assert_array_equal(rooms, fp.rooms)
+    names = feature_target_names()
+    inner_x, inner_y = names.index("fp_BrowInnerLeft_x"), names.index("fp_BrowInnerLeft_y")
+    gap_x = rig.neutral[rig.landmarks[22], 0] - rig.neutral[rig.landmarks[[27, 28, 29, 30]], 0].mean()
+    assert rooms[0, inner_x] == pytest.approx(0.5 * gap_x, rel=0.05) and np.isinf(rooms[1, inner_x])
+    assert np.isfinite(rooms[0, inner_y]) and np.isinf(rooms[1, inner_y])  # down onto the lid, not up
+    driver = RigDriver(rig)
+    columns = [driver.target_names.index(n) for n in names]
+    frames = np.zeros((2, 62))
+    angry = table1_weights(table1("angry"), 1.0)
+    surprise = table1_weights(table1("surprise"), 1.0)
+    for w in (angry, surprise):
+        raw = np.array([[w[n] * s for n in names] for s in (1.2, 2.4)])
+        out = driver.weights(frames, raw)[:, columns]
+        np.testing.assert_allclose(out, limit_moves(raw, rooms), rtol=1e-5, atol=1e-9)
+        free = np.isinf(np.where(raw[0] < 0, rooms[0], rooms[1]))
+        np.testing.assert_allclose(out[1, free], 2.0 * out[0, free], rtol=1e-5, atol=1e-9)
+    out = driver.weights(frames, np.array([[angry[n] * s for n in names] for s in (1.2, 2.4)]))[:, columns]
+    assert -rooms[0, inner_x] < out[1, inner_x] < out[0, inner_x] < -0.5 * rooms[0, inner_x]  # drawn in, short of it
+    up = np.array([[surprise[n] * s for n in names] for s in (1.2, 2.4)])
+    assert driver.weights(frames, up)[1, driver.target_names.index("fp_BrowInnerLeft_y")] == pytest.approx(0.012)
+
+
+def test_ict_build_time(ict_dir: Path) -> None:
+    """Building the rig on ICT (one biharmonic solve per feature) stays well under 10 s."""
+    import time
+
+    from mien.rig.ict_facekit import load_ict_facekit
+
+    rig = load_ict_facekit(ict_dir)
+    start = time.perf_counter()
+    FeaturePointRig.build(rig)
+    assert time.perf_counter() - start < 10.0

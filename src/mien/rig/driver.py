@@ -24,6 +24,7 @@ import numpy as np
 
 from mien.errors import InvalidValueError
 from mien.facs.catalogue import FACE_CHANNELS, POSE_CHANNELS
+from mien.rig.feature_points import limit_moves
 from mien.rig.mapping import AUMapping
 from mien.rig.model import Rig
 from mien.small_matmul import matmul_rows
@@ -62,6 +63,11 @@ class RigDriver:
         names = self.target_names
         columns = [names.index(name) if name in names else -1 for name in feature_target_names()]
         self._feature_columns = np.array(columns, np.intp) if min(columns) >= 0 else None
+        self._feature_rooms: np.ndarray | None = None
+        if self._feature_columns is not None and rig is not None:
+            from mien.rig.feature_points import feature_rooms
+
+            self._feature_rooms = feature_rooms(rig)
         self._frames32 = np.zeros((0, _N), np.float32)
 
     @property
@@ -87,7 +93,8 @@ class RigDriver:
 
         Each target is ``sum(intensity * weight_at_E / 5)`` over its AU channels, clipped to [0, 1] (see
         :mod:`mien.rig.mapping`). ``feature_weights`` (n, 54) metres, from ``"feature_points"`` characters, are
-        written to the rig's ``fp_*`` targets (unclipped: they are signed distances). ``out``: a C-contiguous
+        written to the rig's ``fp_*`` targets (unclipped: they are signed distances), moves toward a barrier
+        softly limited to the room this rig has (:func:`mien.rig.feature_points.limit_moves`). ``out``: a C-contiguous
         (n, n_targets) float32 array to fill (nothing is allocated then, once the batch size is stable).
         """
         values = self._check_frames(frames)
@@ -113,8 +120,16 @@ class RigDriver:
                 raise InvalidValueError(
                     "feature_weights", f"array of shape {features.shape}", f"({n}, {self._feature_columns.size}) metres"
                 )
+            if self._feature_rooms is not None:
+                features = limit_moves(features, self._feature_rooms)
             out[:, self._feature_columns] = features
         return out
+
+    @property
+    def feature_rooms(self) -> np.ndarray | None:
+        """(2, 54) metres: the limits of the feature moves toward a barrier on this rig (negative, positive
+        weights; inf = exact), see :func:`mien.rig.feature_points.feature_rooms`; None without feature targets."""
+        return self._feature_rooms
 
     def pose(self, frames: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """(n, 5) float64 head yaw/pitch/roll and gaze yaw/pitch in degrees (:data:`POSE_COLUMNS`), into ``out``."""

@@ -1,34 +1,43 @@
-"""Broekens' feature-point rig: 18 MPEG-4 feature points, each an anchor vertex pulling a region of vertices.
+"""Broekens' feature-point rig: 18 MPEG-4 feature points whose moves spread over the skin as one smooth field.
 
 Broekens, Qu & Brinkman (*Dynamic Facial Expression of Emotion Made Easy*) model each feature as an anchor
 "attached to a set of vertices" and each emotion as a displacement vector per feature (their Table 1). Here
 each anchor is the face-surface vertex nearest the mean of some iBUG-68 landmarks (``data/mpeg4_features.csv``
 says which, with the MPEG-4 feature point it stands for), so any mesh with a landmark map is instrumented
-without hand rigging. Each region's weights are 1 at the anchor (and within an optional plateau) and fall
-smoothly to 0 at a geodesic radius measured along mesh edges, so regions never jump the mouth slit or the
-eye openings; a soft "closer to these landmarks than to those" cut keeps upper-lip anchors off the lower lip
-and upper-lid anchors off the lower lid even on a mesh whose lips touch.
+without hand rigging.
 
-Smooth at the study's top intensity (:data:`DESIGN_INTENSITY` 2.4). Each feature has separate x, y and z
-weights, shaped by the largest move ``D`` that Table 1 asks of that axis over the six emotions and four
-blends at 2.4 (:func:`design_moves`):
+**The deformation rule.** Each feature's field is the smoothest surface function (biharmonic,
+:mod:`mien.rig.harmonic`) that is 1 on the feature's plateau (the anchor and the skin within ``plateau_m``),
+holds every other feature's anchor (the skin within :data:`CORE_M`) at that feature's share (0, or the csv
+``rides`` share: the lower lip rides the jaw, the mouth corners half, the lip points a corner's rise by half)
+and every lid margin still (a lid feature moves its own margin with a raised-cosine falloff along it), and is
+0 beyond a geodesic radius. So each anchor moves exactly by its own Table 1 vector (plus its shares of the
+features it rides), the skin between anchors follows the smoothest interpolation of their moves (a lip keeps
+its curve; the glabella between two inner brows closing in is compressed evenly, not folded), and the mouth
+slit and eye openings are natural boundaries (the field couples only vertices joined by triangles). The
+smoothest field overshoots a little beyond a held neighbour (at most about 0.2 of a feature's move, the
+other way). Summed per-feature falloffs (mien 0.1) put a kink wherever a region was capped or cut and
+bunched the skin between neighbouring anchors: creases, flaps, a bow-tie mouth.
 
-* a region is wide enough that its falloff's steepest slope times ``D`` stays below :data:`MAX_STRAIN`
-  (``R >= P + pi D / (2 MAX_STRAIN)``), grown at most :data:`GROWTH_LIMIT` times past the csv radius;
-* a move toward a fixed barrier is strain-limited: the weight is at most ``BARRIER_STRAIN * g / D`` where
-  ``g`` is the distance to the barrier (the upper-lid margin under a brow moving down, the lower-lid margin
-  over a cheek moving up: geodesic; the facial midline for an inner brow moving in: ``|x|``). So the skin
-  between feature and barrier compresses by at most :data:`BARRIER_STRAIN` at 2.4 instead of folding (on ICT
-  the inner brows sit 12 mm from the midline and anger asks 31 mm inward at 2.4: exact motion must fold).
-  Where the anchor is farther than ``D / BARRIER_STRAIN`` from its barrier it still moves exactly.
+Each region is wide enough for its largest design move ``D`` (over the six emotions and four blends at
+:data:`DESIGN_INTENSITY`, after the limits below): ``R = P + SPREAD * D``, between the csv radius and
+:data:`GROWTH_LIMIT` times it.
 
-Every other anchor move is exact and linear (twice the intensity, twice the move). The targets are linear,
-so a limited axis is limited in both directions (the brows rise a little less in surprise too).
+**Moves toward a barrier are softly limited** (:func:`feature_rooms`, :func:`limit_moves`, applied by
+:class:`mien.rig.driver.RigDriver`). Table 1's vectors are metres on an unknown-scale FaceGen head; on ICT the
+inner brows sit 12 mm from the midline and anger asks 31 mm inward at 2.4, so exact motion must fold. A move
+toward a barrier (an inner brow, a lip point or a mouth corner toward the facial midline, a brow down onto
+its upper lid, a cheek up onto its lower lid, a lid onto the other lid, the upper lip up to the nostrils)
+becomes ``L tanh(w / L)`` with ``L = room * gap``, ``gap`` the neutral distance from the feature's landmarks
+to the barrier along that axis and ``room`` from the csv (0.5; 0.4 for the lids, so two closing lids never
+meet). Small moves stay exact (slope 1 at 0), large ones approach ``L``. Moves away from a barrier and every
+other move are exact and linear: twice the intensity, twice the move. The compiled targets themselves stay
+linear and exact at the anchor.
 
-The rig is linear, so it compiles into 54 sparse morph targets ``fp_<Feature>_x/_y/_z``: weight 1 moves the
-region 1 m along rig +x (the character's left), +y (up) or +z (forward) times its weights. A Table 1 vector
-``(z, x, y)`` (+x the viewer's right = the character's left, +y down) at intensity ``s`` becomes the target
-weights ``(x s, -y s, z s)``: see :func:`table1_weights`.
+The rig compiles into 54 sparse morph targets ``fp_<Feature>_x/_y/_z``: weight 1 moves the region 1 m along
+rig +x (the character's left), +y (up) or +z (forward) times its field. A Table 1 vector ``(z, x, y)`` (+x the
+viewer's right = the character's left, +y down) at intensity ``s`` becomes the target weights
+``(x s, -y s, z s)``: see :func:`table1_weights`.
 
 >>> from mien.rig.builtin_head import builtin_head
 >>> rig = builtin_head()
@@ -51,6 +60,7 @@ import numpy as np
 
 from mien.errors import InvalidValueError, UnknownNameError
 from mien.rig.geodesic import EdgeGraph
+from mien.rig.harmonic import BiharmonicSystem
 from mien.rig.model import MorphTarget, Rig
 
 __all__ = [
@@ -58,25 +68,29 @@ __all__ = [
     "FEATURE_NAMES",
     "FeaturePointRig",
     "FeatureSpec",
+    "feature_rooms",
     "feature_specs",
     "feature_target_names",
+    "limit_moves",
     "table1_weights",
 ]
 
 AXES = ("x", "y", "z")
 """Axis suffixes of the compiled targets (rig frame)."""
-SIDE_BLEND_M = 0.003
-"""Width (m) over which a region's closer-to/than cut fades."""
 DESIGN_INTENSITY = 2.4
 """Emotion intensity the regions are shaped for: the strongest of Broekens' study (1.2 and 2.4)."""
-MAX_STRAIN = 1.0
-"""Largest relative length change (compression or stretch) one feature's move may cause at
-:data:`DESIGN_INTENSITY` (1 would squash skin to nothing: a fold)."""
-GROWTH_LIMIT = 2.0
+SPREAD = 3.0
+"""Region radius beyond the plateau per metre of design move: a biharmonic bump's steepest slope is about
+1.5 / (R - P), so the skin in front of a moving anchor compresses by at most about half at :data:`DESIGN_INTENSITY`."""
+GROWTH_LIMIT = 3.0
 """Largest factor by which a large design move widens a region beyond its csv radius."""
-BARRIER_STRAIN = 0.5
-"""Largest compression of the skin between a feature and a fixed barrier (midline, lid margin) at
-:data:`DESIGN_INTENSITY`."""
+PLATEAU_SIDE_MARGIN_M = 0.006
+"""How much closer (m) to its ``closer_to`` landmarks than to its ``than`` landmarks a plateau vertex must be."""
+CORE_M = 0.003
+"""Geodesic radius (m) of the patch around another feature's anchor that a feature's field holds at that
+feature's share (its own plateau, e.g. the jaw's whole chin, binds only its own field)."""
+MIDLINE_LANDMARKS = (27, 28, 29, 30)
+"""iBUG nose-bridge landmarks whose mean x is the facial midline."""
 
 
 @dataclass(frozen=True)
@@ -90,19 +104,26 @@ class FeatureSpec:
     landmarks: tuple[int, ...]
     """0-based iBUG-68 landmarks whose mean places the anchor."""
     radius_m: float
-    """Geodesic radius of the region, metres."""
+    """Geodesic radius of the region, metres (widened for large design moves)."""
     plateau_m: float
-    """Geodesic distance within which the weight stays 1, metres."""
+    """Geodesic distance within which the feature moves the skin rigidly, metres."""
     closer_to: tuple[int, ...]
-    """Landmarks a region vertex must be geodesically closer to than to :attr:`than` (empty = no cut)."""
+    """Landmarks a plateau vertex must be geodesically closer to than to :attr:`than` (empty = no cut)."""
     than: tuple[int, ...]
     """See :attr:`closer_to`."""
+    rides: tuple[tuple[str, tuple[float, float, float]], ...]
+    """Features whose moves this feature's anchor shares, each with its share along rig x, y and z
+    (``("Jaw", (1, 1, 1))``: the lower lip goes with the jaw)."""
+    margin: tuple[int, ...]
+    """Lid margin (landmark chain joined along mesh edges) this lid feature moves; empty for the others."""
     barrier: tuple[int, ...]
-    """Landmark chain (joined along mesh edges) that stays put while the feature moves toward it (empty = none)."""
+    """Landmarks whose mean the move along :attr:`toward` heads for (empty = none)."""
     toward: str
-    """Rig axis and sign of a move toward :attr:`barrier` (``"-y"`` down onto the upper lid, ``"+y"``); ``""``."""
+    """Rig axis and sign of the move toward :attr:`barrier` (``"-y"`` down onto the upper lid, ``"+y"``); ``""``."""
     medial: bool
-    """Whether the feature's x move toward the facial midline is strain-limited (the inner brows)."""
+    """Whether the feature's x move toward the facial midline is limited (the inner brows)."""
+    room: float
+    """Fraction of the neutral gap to the barrier (or midline) that a limited move approaches; 0 = none."""
 
 
 def _ints(text: str) -> tuple[int, ...]:
@@ -114,21 +135,32 @@ def feature_specs() -> tuple[FeatureSpec, ...]:
     """The 18 feature specs from ``data/mpeg4_features.csv``, in Broekens' Table 1 order."""
     text = resources.files("mien.rig").joinpath("data/mpeg4_features.csv").read_text(encoding="utf-8")
     rows = csv.DictReader(line for line in text.splitlines() if not line.startswith("#"))
-    return tuple(
-        FeatureSpec(
-            name=row["feature"],
-            mpeg4_fp=row["mpeg4_fp"],
-            landmarks=_ints(row["landmarks"]),
-            radius_m=float(row["radius_m"]),
-            plateau_m=float(row["plateau_m"]),
-            closer_to=_ints(row["closer_to"]),
-            than=_ints(row["than"]),
-            barrier=_ints(row["barrier"]),
-            toward=row["toward"].strip(),
-            medial=row["medial"].strip() == "1",
+    specs = []
+    for row in rows:
+        rides = []
+        for part in row["rides"].split(";"):
+            words = part.split()
+            if words:
+                shares = [float(w) for w in words[1:]]
+                rides.append((words[0], (shares * 3)[:3] if len(shares) == 1 else tuple(shares)))
+        specs.append(
+            FeatureSpec(
+                name=row["feature"],
+                mpeg4_fp=row["mpeg4_fp"],
+                landmarks=_ints(row["landmarks"]),
+                radius_m=float(row["radius_m"]),
+                plateau_m=float(row["plateau_m"]),
+                closer_to=_ints(row["closer_to"]),
+                than=_ints(row["than"]),
+                rides=tuple((name, (float(x), float(y), float(z))) for name, (x, y, z) in rides),
+                margin=_ints(row["margin"]),
+                barrier=_ints(row["barrier"]),
+                toward=row["toward"].strip(),
+                medial=row["medial"].strip() == "1",
+                room=float(row["room"] or 0.0),
+            )
         )
-        for row in rows
-    )
+    return tuple(specs)
 
 
 FEATURE_NAMES: tuple[str, ...] = tuple(spec.name for spec in feature_specs())
@@ -146,9 +178,68 @@ def _falloff(d: np.ndarray, plateau: float, radius: float) -> np.ndarray:
     return np.asarray(0.5 * (1.0 + np.cos(np.pi * t)))
 
 
-def design_moves() -> np.ndarray:
-    """(2, 18, 3) float64 metres: per feature and rig axis the largest move at :data:`DESIGN_INTENSITY` over
-    Broekens' six emotions and four blends, toward + (index 0) and toward - (index 1); all >= 0."""
+def feature_rooms(rig: Rig) -> np.ndarray:
+    """(2, 54) float64 metres: per target column the limit ``L`` of its negative (row 0) and positive (row 1)
+    weights (:func:`limit_moves`); ``inf`` where the move is exact.
+
+    ``L = room * gap``: ``gap`` is the neutral distance along the move's axis from the mean of the feature's
+    landmarks to the mean of its barrier landmarks (or, for a medial move, to the facial midline, the mean x
+    of :data:`MIDLINE_LANDMARKS`). Landmarks only, so a driver computes it in microseconds. A rig without a
+    (68,) landmark map, or whose landmarks coincide, gets no limits.
+    """
+    rooms = np.full((2, 3 * len(FEATURE_NAMES)), np.inf)
+    landmarks = np.asarray(rig.landmarks, dtype=np.int64)
+    if landmarks.shape != (68,) or landmarks.min() < 0 or landmarks.max() >= rig.n_vertices:
+        return rooms
+    points = np.asarray(rig.neutral, dtype=np.float64)[landmarks]
+    midline = float(points[list(MIDLINE_LANDMARKS), 0].mean())
+    for f, spec in enumerate(feature_specs()):
+        if spec.room <= 0:
+            continue
+        own = points[list(spec.landmarks)].mean(axis=0)
+        if spec.barrier and spec.toward:
+            axis = AXES.index(spec.toward[1])
+            gap = abs(float(points[list(spec.barrier), axis].mean()) - own[axis])
+            if gap > 1e-6:
+                rooms[0 if spec.toward[0] == "-" else 1, 3 * f + axis] = spec.room * gap
+        if spec.medial:
+            gap = abs(own[0] - midline)
+            if gap > 1e-6:
+                rooms[0 if own[0] > midline else 1, 3 * f] = spec.room * gap
+    return rooms
+
+
+def limit_moves(weights: np.ndarray, rooms: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """Softly limit (..., 54) feature weights (metres) by ``rooms`` (2, 54) from :func:`feature_rooms`.
+
+    A weight ``w`` whose side has a finite limit ``L`` becomes ``L tanh(w / L)`` (exact for small moves,
+    never past ``L``); the others are copied. ``out`` may be ``weights`` itself.
+
+    >>> rooms = np.full((2, 2), np.inf); rooms[0, 0] = 0.005
+    >>> limit_moves(np.array([-0.001, -0.02]), rooms[:, :1].repeat(2, axis=1)).round(4).tolist()
+    [-0.001, -0.005]
+    >>> limit_moves(np.array([0.02, -0.02]), rooms).tolist()
+    [0.02, -0.02]
+    """
+    values = np.asarray(weights, dtype=np.float64)
+    result = np.array(values, copy=True) if out is None else out
+    if out is not None and out is not weights:
+        result[...] = values
+    for side, sign in ((0, -1.0), (1, 1.0)):
+        limit = rooms[side]
+        cols = np.flatnonzero(np.isfinite(limit))
+        if cols.size == 0:
+            continue
+        part = values[..., cols]
+        bound = limit[cols]
+        capped = sign * bound * np.tanh(sign * part / bound)
+        result[..., cols] = np.where(sign * part > 0, capped, result[..., cols])
+    return result
+
+
+def design_moves(rooms: np.ndarray | None = None) -> np.ndarray:
+    """(18,) float64 metres: per feature the largest anchor move at :data:`DESIGN_INTENSITY` over Broekens' six
+    emotions and four blends, each limited by ``rooms`` (2, 54) when given."""
     from mien.affect.emotions import BLENDS, EMOTIONS, emotion_vector
     from mien.affect.table1 import table1_rig_vectors
 
@@ -156,7 +247,9 @@ def design_moves() -> np.ndarray:
     moves = np.stack(
         [np.tensordot(emotion_vector(name, DESIGN_INTENSITY), vectors, axes=1) for name in EMOTIONS + tuple(BLENDS)]
     )
-    return np.stack([moves.max(axis=0).clip(0.0), (-moves).max(axis=0).clip(0.0)])
+    if rooms is not None:
+        moves = limit_moves(moves.reshape(len(moves), -1), rooms).reshape(moves.shape)
+    return np.asarray(np.linalg.norm(moves, axis=2).max(axis=0))
 
 
 def _chain(graph: EdgeGraph, landmarks: np.ndarray, chain: tuple[int, ...]) -> np.ndarray:
@@ -169,7 +262,7 @@ def _chain(graph: EdgeGraph, landmarks: np.ndarray, chain: tuple[int, ...]) -> n
 
 @dataclass(frozen=True, eq=False)
 class FeaturePointRig:
-    """Anchors and weighted regions of the 18 feature points on one mesh."""
+    """Anchors and smooth fields of the 18 feature points on one mesh."""
 
     names: tuple[str, ...]
     """Feature names (:data:`FEATURE_NAMES`)."""
@@ -178,13 +271,15 @@ class FeaturePointRig:
     region_ids: tuple[np.ndarray, ...]
     """Per feature, (k,) int32 ids of the vertices it moves, ascending."""
     region_weights: tuple[np.ndarray, ...]
-    """Per feature, (k, 3) float32 weights in [0, 1] of its rig x, y and z moves."""
+    """Per feature, (k, 3) float32 field of its rig x, y and z moves (1 at the anchor)."""
     radii_m: np.ndarray
-    """(18,) float64 largest geodesic radius of each region (over the three axes), metres."""
+    """(18,) float64 geodesic radius of each region, metres."""
+    rooms: np.ndarray
+    """(2, 54) float64 move limits of the rig (:func:`feature_rooms`), metres."""
 
     @classmethod
     def build(cls, rig: Rig, radii: Mapping[str, float] | None = None) -> FeaturePointRig:
-        """Place the anchors on ``rig`` from its iBUG landmarks and compute each region's weights.
+        """Place the anchors on ``rig`` from its iBUG landmarks and solve each feature's field.
 
         ``radii`` overrides the csv radius (metres) of the named features: the smallest radius, which a large
         design move still widens (see the module docstring); the plateau is kept below it.
@@ -202,56 +297,65 @@ class FeaturePointRig:
         graph = EdgeGraph.from_mesh(neutral, rig.faces)
         surface = graph.component(landmarks)
         candidates = np.flatnonzero(surface)
-        plus, minus = design_moves()
-        reach = np.maximum(plus, minus)
-        anchors, ids_out, weights_out, radii_out = [], [], [], []
-        for f, spec in enumerate(feature_specs()):
+        rooms = feature_rooms(rig)
+        reach = design_moves(rooms)
+        specs = feature_specs()
+        anchors = []
+        for spec in specs:
+            point = neutral[landmarks[list(spec.landmarks)]].mean(axis=0)
+            anchors.append(int(candidates[np.argmin(np.linalg.norm(neutral[candidates] - point, axis=1))]))
+        plateaus, cores, radius = [], [], np.zeros(len(specs))
+        for f, spec in enumerate(specs):
             small = float(overrides.get(spec.name, spec.radius_m))
             plateau = min(spec.plateau_m, 0.5 * small)
-            # the raised cosine's steepest slope pi / (2 (R - P)) times the design move stays <= MAX_STRAIN
-            # ... up to GROWTH_LIMIT times the csv radius, so a region never spreads across the face
-            radius = np.clip(plateau + np.pi * reach[f] / (2.0 * MAX_STRAIN), small, GROWTH_LIMIT * small)
-            point = neutral[landmarks[list(spec.landmarks)]].mean(axis=0)
-            anchor = int(candidates[np.argmin(np.linalg.norm(neutral[candidates] - point, axis=1))])
-            dist = graph.distances([anchor], limit_m=float(radius.max()))
-            ids = np.flatnonzero(dist < radius.max())
-            weights = np.stack([_falloff(dist[ids], plateau, r) for r in radius], axis=1)
-            weights[ids == anchor] = 1.0
+            radius[f] = np.clip(plateau + SPREAD * reach[f], small, GROWTH_LIMIT * small)
+            ids = np.flatnonzero(graph.distances([anchors[f]], limit_m=plateau) <= plateau)
+            cores.append(ids[graph.distances([anchors[f]], limit_m=CORE_M)[ids] <= CORE_M])
             if spec.closer_to:
-                far = float(radius.max()) * 2 + 0.03
+                far = plateau * 2 + 0.03
                 d_own = graph.distances(landmarks[list(spec.closer_to)], limit_m=far)[ids]
                 d_other = graph.distances(landmarks[list(spec.than)], limit_m=far)[ids]
-                d_own = np.where(np.isfinite(d_own), d_own, far)
-                d_other = np.where(np.isfinite(d_other), d_other, far)
-                t = np.clip((d_other - d_own) / SIDE_BLEND_M * 0.5 + 0.5, 0.0, 1.0)
-                weights *= (t * t * (3.0 - 2.0 * t))[:, None]
-            if spec.barrier and spec.toward:
-                axis = AXES.index(spec.toward[1])
-                move = (plus if spec.toward[0] == "+" else minus)[f, axis]
-                if move > 0:
-                    gap = graph.distances(_chain(graph, landmarks, spec.barrier))[ids]
-                    weights[:, axis] = np.minimum(weights[:, axis], BARRIER_STRAIN * gap / move)
-            if spec.medial:
-                side = np.sign(neutral[anchor, 0])
-                move = (minus if side > 0 else plus)[f, 0]
-                if move > 0:
-                    weights[:, 0] = np.minimum(weights[:, 0], BARRIER_STRAIN * np.abs(neutral[ids, 0]) / move)
-                    weights[neutral[ids, 0] * side <= 0, 0] = 0.0
-            keep = weights.max(axis=1) > 1e-4
-            anchors.append(anchor)
-            ids_out.append(ids[keep].astype(np.int32))
-            weights_out.append(weights[keep].astype(np.float32))
-            radii_out.append(float(radius.max()))
+                ids = ids[np.nan_to_num(d_own, posinf=far) + PLATEAU_SIDE_MARGIN_M < np.nan_to_num(d_other, posinf=far)]
+            plateaus.append(np.union1d(ids, [anchors[f]]).astype(np.int64))
+        # lid margins: held by every feature but their own lid, which moves them with a falloff along the margin
+        margins = [(f, _chain(graph, landmarks, spec.margin)) for f, spec in enumerate(specs) if spec.margin]
+        system = BiharmonicSystem(neutral, rig.faces)
+        ids_out, weights_out = [], []
+        for f, spec in enumerate(specs):
+            dist = graph.distances([anchors[f]], limit_m=float(radius[f]))
+            region = np.flatnonzero(dist < radius[f])
+            values = np.zeros((rig.n_vertices, 3))
+            fixed = np.zeros(rig.n_vertices, bool)
+            for f_margin, chain in margins:
+                fixed[chain] = True
+                if f_margin == f:
+                    own = _falloff(dist[chain], spec.plateau_m, spec.radius_m)[:, None]
+                    values[chain] = np.maximum(values[chain], own)
+            for g, other in enumerate(specs):
+                if g != f:  # the other anchors (their cores) hold still or ride this feature by their share
+                    fixed[cores[g]] = True
+                    values[cores[g]] = dict(other.rides).get(spec.name, (0.0, 0.0, 0.0))
+            fixed[plateaus[f]] = True
+            values[plateaus[f]] = 1.0
+            fixed_ids = np.flatnonzero(fixed)
+            field = system.fill(fixed_ids, values[fixed_ids], free=region)
+            outside = np.ones(rig.n_vertices, bool)
+            outside[region] = False
+            field[(outside & ~fixed) | ~surface] = 0.0
+            keep = np.flatnonzero(np.abs(field).max(axis=1) > 1e-4)
+            ids_out.append(keep.astype(np.int32))
+            weights_out.append(field[keep].astype(np.float32))
         return cls(
             names=FEATURE_NAMES,
             anchors=np.asarray(anchors, dtype=np.int32),
             region_ids=tuple(ids_out),
             region_weights=tuple(weights_out),
-            radii_m=np.asarray(radii_out),
+            radii_m=radius,
+            rooms=rooms,
         )
 
     def weights(self, feature: str, n_vertices: int, axis: str | None = None) -> np.ndarray:
-        """(n_vertices,) float32 dense weights of ``feature`` along rig ``axis`` (None: the largest of the three)."""
+        """(n_vertices,) float32 dense field of ``feature`` along rig ``axis`` (None: the largest of the three)."""
         if feature not in self.names:
             raise UnknownNameError("feature point", feature, self.names)
         if axis is not None and axis not in AXES:
@@ -267,19 +371,28 @@ class FeaturePointRig:
         targets = []
         for name, ids, weights in zip(self.names, self.region_ids, self.region_weights, strict=True):
             for a, axis in enumerate(AXES):
-                moved = weights[:, a] > 0
+                moved = weights[:, a] != 0
                 deltas = np.zeros((int(moved.sum()), 3), np.float32)
                 deltas[:, a] = weights[moved, a]
                 targets.append(MorphTarget(f"fp_{name}_{axis}", ids[moved], deltas))
         return tuple(targets)
 
-    def displacement(self, vectors_zxy: np.ndarray, intensity: float, n_vertices: int) -> np.ndarray:
-        """(n_vertices, 3) float64 displacement (m) of Broekens vectors ``(18, 3)`` ``[z, x, y]`` at ``intensity``."""
+    def displacement(
+        self, vectors_zxy: np.ndarray, intensity: float, n_vertices: int, limited: bool = False
+    ) -> np.ndarray:
+        """(n_vertices, 3) float64 displacement (m) of Broekens vectors ``(18, 3)`` ``[z, x, y]`` at ``intensity``.
+
+        ``limited``: the moves toward barriers limited as the driver shows them (:func:`limit_moves`);
+        otherwise the compiled targets at exactly :func:`table1_weights`.
+        """
+        weights = table1_weights(vectors_zxy, intensity)
+        values = np.array([weights[name] for name in feature_target_names()])
+        if limited:
+            values = limit_moves(values, self.rooms)
         out = np.zeros((n_vertices, 3))
-        for name, value in table1_weights(vectors_zxy, intensity).items():
-            feature, axis = name[3:-2], AXES.index(name[-1])
-            i = self.names.index(feature)
-            out[self.region_ids[i], axis] += value * self.region_weights[i][:, axis]
+        for f in range(len(self.names)):
+            for a in range(3):
+                out[self.region_ids[f], a] += values[3 * f + a] * self.region_weights[f][:, a]
         return out
 
 
