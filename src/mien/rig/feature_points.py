@@ -9,7 +9,7 @@ without hand rigging.
 **The deformation rule.** Each feature's field is the smoothest surface function (biharmonic,
 :mod:`mien.rig.harmonic`) that is 1 on the feature's plateau (the anchor and the skin within ``plateau_m``),
 holds every other feature's anchor (the skin within :data:`CORE_M`) at that feature's share (0, or the csv
-``rides`` share: the lower lip rides the jaw, the mouth corners half, the lip points a corner's rise by half)
+``rides`` share: the lower lip rides the jaw, the mouth corners half, the lip points a corner's rise)
 and every lid margin still (a lid feature moves its own margin with a raised-cosine falloff along it), and is
 0 beyond a geodesic radius. So each anchor moves exactly by its own Table 1 vector (plus its shares of the
 features it rides), the skin between anchors follows the smoothest interpolation of their moves (a lip keeps
