@@ -59,7 +59,7 @@ BUILTIN_IDENTITIES: dict[str, HeadShape] = {
         chin_scale=1.35,
         skin_srgb=(0.72, 0.52, 0.40),
         lip_srgb=(0.60, 0.33, 0.31),
-        brow_srgb=(0.09, 0.07, 0.06),
+        brow_srgb=(0.16, 0.11, 0.08),
         hair_srgb=(0.07, 0.055, 0.05),
         iris_srgb=(0.36, 0.23, 0.13),
     ),

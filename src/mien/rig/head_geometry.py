@@ -265,7 +265,7 @@ def _relief(x: np.ndarray, yd: np.ndarray, shape: HeadShape) -> np.ndarray:
     prof_y = np.array([-0.054, -0.050, -0.045, -0.040, -0.035, -0.025, -0.010, 0.004, 0.014])
     prof_h = np.array([0.000, 0.007, 0.016, 0.0215, 0.0225, 0.017, 0.0090, 0.003, 0.000])
     wid_y = np.array([-0.050, -0.036, -0.020, 0.004])
-    wid_s = np.array([0.0085, 0.0080, 0.0058, 0.0046])
+    wid_s = np.array([0.0070, 0.0068, 0.0055, 0.0046])
     height = _pchip(prof_y, prof_h, yd) * shape.nose_scale
     width = _pchip(wid_y, wid_s, yd) * shape.nose_width_scale
     z += height * np.exp(-0.5 * (x / width) ** 2)
