@@ -98,9 +98,9 @@ def test_small_real_run_on_the_builtin_head(landmarker_path: Path, shared_data: 
     assert head.slope[au12] > 0.7
     assert head.r[au1] > 0.8
     assert head.strongest[au12] and head.strongest[au1]
-    # AU26 on the built-in head: the jaw drop is read as lips parting (AU25), not as AU26
-    assert not head.strongest[au26]
-    assert dict(head.leaks()[au26]).get(25, 0.0) > 0.5
+    # AU26 on the built-in head: since the jaw's second pass (rotation + forward slide, an oval opening) the drop
+    # reads as AU26 (measured r 0.99, slope 0.67), with some lips-parting (AU25) beside it
+    assert head.strongest[au26] and head.r[au26] > 0.9 and head.slope[au26] > 0.4
     assert head.seen_on_human[au12] == "yes"  # the shared clip smiles
     assert head.seen_on_human[au26] == "untested"
     assert result.human.n_faces > 50
