@@ -206,8 +206,7 @@ def run_emotions(args: argparse.Namespace) -> int:
     frontal = result.rate(expression=basics, view=("frontal-1m", "frontal-3m"))
     print(f"joy, sadness, anger, surprise, fear, frontal: {frontal:.0%}")
     if result.subset(expression="disgust"):
-        disgust = result.subset(expression="disgust")
-        by_classifier = sum(s.top == "angry" for s in disgust) / len(disgust)
+        by_classifier = result.label_rate("angry", expression="disgust")
         by_facs = result.facs_rate("anger", expression="disgust")
         print(f"disgust taken for anger: classifier {by_classifier:.0%}, FACS reading {by_facs:.0%}")
     print(f"wrote {len(written)} files to {args.out} (recognition.json, sheet_*.png, confusion.png, quality.png)")

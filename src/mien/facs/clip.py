@@ -37,9 +37,7 @@ def interpolate_frames(values: np.ndarray, fps: float, times_s: np.ndarray | flo
     return (1.0 - weight) * values[low] + weight * values[high]
 
 
-def resample_on_times(
-    times_s: np.ndarray, values: np.ndarray, fps: float, n_frames: int | None = None
-) -> np.ndarray:
+def resample_on_times(times_s: np.ndarray, values: np.ndarray, fps: float, n_frames: int | None = None) -> np.ndarray:
     """``values`` (n, ...) sampled at the real times ``times_s`` (n,) seconds -> a regular grid at ``fps``.
 
     The grid starts at ``times_s[0]`` and steps ``1 / fps``: ``n_frames`` frames, or by default up to

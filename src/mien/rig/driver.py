@@ -24,7 +24,7 @@ import numpy as np
 
 from mien.errors import InvalidValueError
 from mien.facs.catalogue import FACE_CHANNELS, POSE_CHANNELS
-from mien.rig.feature_points import limit_moves
+from mien.rig.feature_points import feature_rooms, limit_moves
 from mien.rig.mapping import AUMapping
 from mien.rig.model import Rig
 from mien.small_matmul import matmul_rows
@@ -65,8 +65,6 @@ class RigDriver:
         self._feature_columns = np.array(columns, np.intp) if min(columns) >= 0 else None
         self._feature_rooms: np.ndarray | None = None
         if self._feature_columns is not None and rig is not None:
-            from mien.rig.feature_points import feature_rooms
-
             self._feature_rooms = feature_rooms(rig)
         self._frames32 = np.zeros((0, _N), np.float32)
 

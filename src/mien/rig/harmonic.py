@@ -90,15 +90,9 @@ class _Csr:
         return out
 
 
-def _solve_numpy(
-    lap: tuple[np.ndarray, np.ndarray, np.ndarray], inv_area: np.ndarray, free: np.ndarray, rhs: np.ndarray, n: int
-) -> np.ndarray:
-    """Jacobi-preconditioned CG on ``(L^T M^-1 L)_ff x = rhs`` with products through ``L`` (no scipy)."""
-    r_, c_, w_ = lap
-    lmat = _Csr(r_, c_, w_, n)
-    lt = _Csr(c_, r_, w_, n)
-    mask = np.zeros(n, bool)
-    mask[free] = True
+def _solve_numpy(lmat: _Csr, lt: _Csr, inv_area: np.ndarray, free: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """Jacobi-preconditioned CG on ``(L^T M^-1 L)_ff x = rhs`` with products through ``L`` and ``L^T`` (no scipy)."""
+    n = lmat.n
 
     def apply(xf: np.ndarray) -> np.ndarray:
         full = np.zeros((n, *xf.shape[1:]))
@@ -139,13 +133,21 @@ class BiharmonicSystem:
         self._lap, areas = cotan_laplacian(p, faces)
         self._inv_area = 1.0 / areas
         self._q: object | None = None
+        self._csr: tuple[_Csr, _Csr] | None = None
+        r_, c_, w_ = self._lap
         try:
             from scipy.sparse import coo_matrix, diags
         except ImportError:
             return
-        r_, c_, w_ = self._lap
         lmat = coo_matrix((w_, (r_, c_)), shape=(self.n_vertices, self.n_vertices)).tocsr()
         self._q = (lmat.T @ diags(self._inv_area) @ lmat).tocsr()
+
+    def _numpy_operators(self) -> tuple[_Csr, _Csr]:
+        """``(L, L^T)`` for the no-scipy path, built on first use and kept."""
+        if self._csr is None:
+            r_, c_, w_ = self._lap
+            self._csr = (_Csr(r_, c_, w_, self.n_vertices), _Csr(c_, r_, w_, self.n_vertices))
+        return self._csr
 
     def fill(self, fixed: np.ndarray, values: np.ndarray, free: np.ndarray | None = None) -> np.ndarray:
         """(n, k) float64 fields equal to ``values`` (len(fixed), k) on vertex ids ``fixed``, smoothest elsewhere.
@@ -171,10 +173,9 @@ class BiharmonicSystem:
         if free.size == 0:
             return out
         if self._q is None:
-            r_, c_, w_ = self._lap
-            lmat, lt = _Csr(r_, c_, w_, n), _Csr(c_, r_, w_, n)
+            lmat, lt = self._numpy_operators()
             rhs = -lt.matvec(lmat.matvec(known) * self._inv_area[:, None])[free]
-            out[free] = _solve_numpy(self._lap, self._inv_area, free, rhs, n)
+            out[free] = _solve_numpy(lmat, lt, self._inv_area, free, rhs)
             return out
         from scipy.sparse.linalg import splu
 

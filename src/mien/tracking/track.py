@@ -294,8 +294,6 @@ def apply_gaps(raw: Track, max_gap_s: float = MAX_GAP_S) -> Track:
     )
 
 
-
-
 @cache
 def _file_sha256(path: str, size: int, mtime_ns: int) -> str:
     digest = hashlib.sha256()

@@ -252,6 +252,11 @@ class RecognitionResult:
         judged = [float(j) for j in (s.correct() for s in self.subset(**conditions)) if j is not None]
         return float(np.mean(judged)) if judged else float("nan")
 
+    def label_rate(self, label: str, **conditions: Any) -> float:
+        """Share of matching stimuli whose top classifier label is ``label`` (``"angry"``...); nan when none match."""
+        scores = self.subset(**conditions)
+        return float(np.mean([s.top == label for s in scores])) if scores else float("nan")
+
     def facs_rate(self, read_as: str | None = None, **conditions: Any) -> float:
         """Share of matching stimuli whose FACS reading is ``read_as`` (default: each one's own expression; a
         blend counts when the reading is one of its components); nan when none has a reading."""

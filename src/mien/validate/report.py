@@ -95,8 +95,7 @@ def _emotions_section(result: Any, folder: Path) -> str:
     frontal = ("frontal-1m", "frontal-3m")
     oblique = tuple(v for v in views if v.startswith("oblique"))
     lateral = tuple(v for v in views if v.startswith("lateral"))
-    disgust = [s for s in result.scores if s.stimulus.expression == "disgust"]
-    took_anger = np.mean([s.top == "angry" for s in disgust]) if disgust else float("nan")
+    took_anger = result.label_rate("angry", expression="disgust")
     lines = [
         "<h2>Emotion recognition (Broekens study conditions)</h2>",
         f"<p>{len(result.scores)} renders classified by <code>{html.escape(result.detector)}</code>. Recognised = "

@@ -1,0 +1,57 @@
+"""Benchmark: building Broekens' feature-point rig (one biharmonic solve per feature) on ICT-FaceKit, against
+loading the head itself from mien's cache (the baseline every feature-point character pays anyway).
+
+Run: ``.venv/bin/python bench/feature_points.py``. Needs the asset (``MIEN_ICT_FACEKIT``, the config file, or
+``../shared/assets/ict-facekit``). The two are timed in interleaved repeats (head load, rig build, ...) so load
+from other processes hits both alike; prints medians, the spread (min..max) and the ratio, and the build time
+against its 10 s budget (the issue: a feature-point head must be ready in seconds, uncached).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO / "src"))
+
+from mien.paths import asset_path  # noqa: E402
+from mien.rig.feature_points import FeaturePointRig  # noqa: E402
+from mien.rig.ict_facekit import load_ict_facekit  # noqa: E402
+
+BUDGET_S = 10.0
+REPEATS = 5
+
+
+def _timed(run: object) -> float:
+    start = time.perf_counter()
+    run()  # type: ignore[operator]
+    return time.perf_counter() - start
+
+
+def main() -> None:
+    folder = asset_path("ict_facekit") or REPO.parent / "shared" / "assets" / "ict-facekit"
+    if not folder.exists():
+        print(f"ICT-FaceKit not found (looked at {folder}); set MIEN_ICT_FACEKIT to run this benchmark")
+        return
+    with tempfile.TemporaryDirectory() as cache:
+        os.environ["MIEN_CACHE_DIR"] = cache
+        rig = load_ict_facekit(folder)  # writes the cache
+        loads, builds = [], []
+        for _ in range(REPEATS):
+            loads.append(_timed(lambda: load_ict_facekit(folder)))
+            builds.append(_timed(lambda: FeaturePointRig.build(rig)))
+    load, build = float(np.median(loads)), float(np.median(builds))
+    print(f"ICT-FaceKit at {folder}: {rig.n_vertices} vertices, {REPEATS} interleaved repeats")
+    print(f"  cached head load (baseline)   {load:7.3f} s median ({min(loads):.3f}..{max(loads):.3f})")
+    print(f"  feature-point rig build       {build:7.3f} s median ({min(builds):.3f}..{max(builds):.3f})")
+    print(f"ratio build / head load: {build / load:.2f}x; build / {BUDGET_S:g} s budget: {build / BUDGET_S:.3f}x")
+
+
+if __name__ == "__main__":
+    main()
