@@ -119,6 +119,32 @@ def test_surprise_raises_brows_and_drops_jaw(head: tuple[Rig, FeaturePointRig]) 
     assert abs(d[rig.landmarks[51], 1]) < 0.0025
 
 
+def test_jaw_carries_the_lower_teeth(head: tuple[Rig, FeaturePointRig]) -> None:
+    """The skin opens and the lower teeth go with it (they used to stay shut behind open lips: a fear grimace)."""
+    rig, fp = head
+    jaw_open = rig.target("jawOpen")
+    surface = EdgeGraph.from_mesh(rig.neutral, rig.faces).component(rig.landmarks)
+    inside = jaw_open.vertex_ids[~surface[jaw_open.vertex_ids]]
+    carried = jaw_open.dense(rig.n_vertices)[inside]
+    teeth = inside[np.linalg.norm(carried, axis=1) > 0.9 * np.linalg.norm(carried, axis=1).max()]
+    assert teeth.size > 20
+    d = deform(rig, table1_weights(table1("surprise"), 1.0))
+    chin = d[fp.anchors[FEATURE_NAMES.index("Jaw")]]
+    assert chin[1] < -0.009
+    assert np.all(d[teeth, 1] < 0.8 * chin[1])  # down with the chin (the share is the head's own jaw's)
+    upper = np.setdiff1d(np.flatnonzero(~surface), jaw_open.vertex_ids)
+    assert np.abs(d[upper]).max() < 1e-9  # the upper teeth and eyes stay
+
+
+def test_happy_curves_the_lower_lip_up(head: tuple[Rig, FeaturePointRig]) -> None:
+    """Table 1 lifts the corners 7 mm and lowers the lower lip's halfway points 1 mm: a U, not a raised line."""
+    rig, _ = head
+    d = deform(rig, table1_weights(table1("happy"), 1.2))
+    corners = d[rig.landmarks[[48, 54]], 1].mean()
+    middle = d[rig.landmarks[57], 1]
+    assert corners > 0.007 and middle < 0.4 * corners
+
+
 def test_angry_pulls_inner_brows_together_and_down(head: tuple[Rig, FeaturePointRig]) -> None:
     rig, _ = head
     d = deform(rig, table1_weights(table1("angry"), 1.0))

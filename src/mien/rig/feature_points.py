@@ -9,12 +9,14 @@ without hand rigging.
 **The deformation rule.** Each feature's field is the smoothest surface function (biharmonic,
 :mod:`mien.rig.harmonic`) that is 1 on the feature's plateau (the anchor and the skin within ``plateau_m``),
 holds every other feature's anchor (the skin within :data:`CORE_M`) at that feature's share (0, or the csv
-``rides`` share: the lower lip rides the jaw, the mouth corners half, the lip points a corner's rise)
+``rides`` share: the lower lip rides the jaw, the mouth corners half, the upper lip points a corner's rise)
 and every lid margin still (a lid feature moves its own margin with a raised-cosine falloff along it), and is
 0 beyond a geodesic radius. So each anchor moves exactly by its own Table 1 vector (plus its shares of the
 features it rides), the skin between anchors follows the smoothest interpolation of their moves (a lip keeps
 its curve; the glabella between two inner brows closing in is compressed evenly, not folded), and the mouth
-slit and eye openings are natural boundaries (the field couples only vertices joined by triangles). The
+slit and eye openings are natural boundaries (the field couples only vertices joined by triangles). Off the
+face surface only the Jaw moves anything: it carries the lower teeth and tongue by the head's own jaw-opening
+target's shares (:data:`JAW_TARGET`), so an open mouth shows the teeth parted, not clenched behind the lips. The
 smoothest field overshoots a little beyond a held neighbour (at most about 0.2 of a feature's move, the
 other way). Summed per-feature falloffs (mien 0.1) put a kink wherever a region was capped or cut and
 bunched the skin between neighbouring anchors: creases, flaps, a bow-tie mouth.
@@ -89,6 +91,8 @@ PLATEAU_SIDE_MARGIN_M = 0.006
 CORE_M = 0.003
 """Geodesic radius (m) of the patch around another feature's anchor that a feature's field holds at that
 feature's share (its own plateau, e.g. the jaw's whole chin, binds only its own field)."""
+JAW_TARGET = "jawOpen"
+"""The head's own target whose off-surface moves (lower teeth, tongue) the Jaw feature carries."""
 MIDLINE_LANDMARKS = (27, 28, 29, 30)
 """iBUG nose-bridge landmarks whose mean x is the facial midline."""
 
@@ -252,6 +256,25 @@ def design_moves(rooms: np.ndarray | None = None) -> np.ndarray:
     return np.asarray(np.linalg.norm(moves, axis=2).max(axis=0))
 
 
+def _jaw_carried(rig: Rig, chin: int, surface: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(ids, shares)`` of the vertices off the face surface (lower teeth, tongue) that the jaw carries.
+
+    The head's own jaw-opening target (:data:`JAW_TARGET`) says which: each moves with the Jaw feature by its
+    displacement there relative to the chin's (1 for the lower teeth, less toward the back of the tongue). A rig
+    without that target carries nothing, and its teeth stay put as the skin opens.
+    """
+    target = next((t for t in rig.targets if t.name == JAW_TARGET), None)
+    if target is None:
+        return np.zeros(0, np.int64), np.zeros(0)
+    dense = target.dense(rig.n_vertices)
+    chin_move = float(np.linalg.norm(dense[chin]))
+    if chin_move <= 1e-6:
+        return np.zeros(0, np.int64), np.zeros(0)
+    ids = target.vertex_ids[~surface[target.vertex_ids]].astype(np.int64)
+    shares = np.clip(np.linalg.norm(dense[ids], axis=1) / chin_move, 0.0, 1.0)
+    return ids, shares
+
+
 def _chain(graph: EdgeGraph, landmarks: np.ndarray, chain: tuple[int, ...]) -> np.ndarray:
     """Vertex ids along a chain of landmarks joined by shortest edge paths (a lid margin stays on its lid)."""
     ids = [landmarks[list(chain)]]
@@ -342,6 +365,9 @@ class FeaturePointRig:
             outside = np.ones(rig.n_vertices, bool)
             outside[region] = False
             field[(outside & ~fixed) | ~surface] = 0.0
+            if spec.name == "Jaw":
+                inside = _jaw_carried(rig, anchors[f], surface)
+                field[inside[0]] = inside[1][:, None]
             keep = np.flatnonzero(np.abs(field).max(axis=1) > 1e-4)
             ids_out.append(keep.astype(np.int32))
             weights_out.append(field[keep].astype(np.float32))
