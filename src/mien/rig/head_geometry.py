@@ -58,6 +58,11 @@ TEETH_SHOW_M = 0.0032
 """How far the upper central incisors' edges reach below the lip line, metres (seen when the lips part)."""
 ARCH_DEPTH_M = 0.022
 """How far the dental arch curves back from the midline to ``x`` = the mouth's half-width, metres."""
+CAVITY_FLARE = (0.3, 0.3, 0.0)
+"""How much wider and taller (x, y) the mouth cavity's back is than its front: a pear lying behind the lips. What
+is seen through the slit is the back, wide and tall enough for a smile's stretched, raised corners (Table 1 joy
+at 2.4: 10 mm out, 17 mm up) and for an oblique view past the far corner; the front stays as narrow as the lips,
+behind the cheeks that a smile pulls back and in front of nothing the open jaw shows."""
 
 # Teeth of one side of each row, midline outward: width along the arch, crown height, labio-lingual
 # thickness, and how far the edge stands back from the central incisor's (toward the gum), all metres.
@@ -533,7 +538,9 @@ def build_head_mesh(shape: HeadShape) -> HeadMesh:
     ym = shape.y_mouth
     z_lips = float(skin_v[m_up[k // 2], 2])
     unit, sphere_faces = _unit_sphere(12, 20)
-    cav = unit * np.array([mw * 1.45, 0.016 * shape.lower_face_scale, 0.021]) + [0, ym - 0.001, z_lips - 0.026]
+    back = (1.0 - unit[:, 2:3]) / 2.0  # 0 at the front, 1 at the back: a pear, wider the deeper
+    radii = np.array([mw * 1.3, 0.016 * shape.lower_face_scale, 0.025]) * (1.0 + back * CAVITY_FLARE)
+    cav = unit * radii + [0, ym - 0.001, z_lips - 0.031]
     dark = srgb_to_linear((0.22, 0.06, 0.07))
     b.add(cav, sphere_faces[:, ::-1], dark, CAVITY, cav[:, :2])
 
