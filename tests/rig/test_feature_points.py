@@ -335,3 +335,9 @@ def test_driver_limits_moves_toward_barriers_only(head: tuple[Rig, FeaturePointR
     assert -rooms[0, inner_x] < out[1, inner_x] < out[0, inner_x] < -0.5 * rooms[0, inner_x]  # drawn in, short of it
     up = np.array([[surprise[n] * s for n in names] for s in (1.2, 2.4)])
     assert driver.weights(frames, up)[1, driver.target_names.index("fp_BrowInnerLeft_y")] == pytest.approx(0.012)
+    corner = names.index("fp_LipCornerLeft_x")  # out toward the jaw line and in toward the midline, both limited
+    gap_out = rig.neutral[rig.landmarks[12], 0] - rig.neutral[rig.landmarks[54], 0]
+    assert rooms[1, corner] == pytest.approx(0.5 * gap_out, rel=0.05) and np.isfinite(rooms[0, corner])
+    happy = np.array([[table1_weights(table1("happy"), s)[n] for n in names] for s in (1.2, 2.4)])
+    widened = driver.weights(frames, happy)[:, driver.target_names.index("fp_LipCornerLeft_x")]
+    assert 0.0 < widened[0] < widened[1] < rooms[1, corner] < happy[1, corner]

@@ -28,8 +28,9 @@ Each region is wide enough for its largest design move ``D`` (over the six emoti
 **Moves toward a barrier are softly limited** (:func:`feature_rooms`, :func:`limit_moves`, applied by
 :class:`mien.rig.driver.RigDriver`). Table 1's vectors are metres on an unknown-scale FaceGen head; on ICT the
 inner brows sit 12 mm from the midline and anger asks 31 mm inward at 2.4, so exact motion must fold. A move
-toward a barrier (an inner brow, a lip point or a mouth corner toward the facial midline, a brow down onto
-its upper lid, a cheek up onto its lower lid, a lid onto the other lid, the upper lip up to the nostrils)
+toward a barrier (an inner brow, a lip point or a mouth corner toward the facial midline, a mouth corner out
+toward the jaw line, a brow down onto its upper lid, a cheek up onto its lower lid, a lid onto the other lid,
+the upper lip up to the nostrils)
 becomes ``L tanh(w / L)`` with ``L = room * gap``, ``gap`` the neutral distance from the feature's landmarks
 to the barrier along that axis and ``room`` from the csv (0.5; 0.4 for the lids, so two closing lids never
 meet). Small moves stay exact (slope 1 at 0), large ones approach ``L``. Moves away from a barrier and every
@@ -123,7 +124,8 @@ class FeatureSpec:
     barrier: tuple[int, ...]
     """Landmarks whose mean the move along :attr:`toward` heads for (empty = none)."""
     toward: str
-    """Rig axis and sign of the move toward :attr:`barrier` (``"-y"`` down onto the upper lid, ``"+y"``); ``""``."""
+    """Rig axis and sign of the move toward :attr:`barrier` (``"-y"`` down onto the upper lid, ``"+y"``, ``"+x"``
+    out to the character's left); ``""``."""
     medial: bool
     """Whether the feature's x move toward the facial midline is limited (the inner brows)."""
     room: float
