@@ -59,10 +59,10 @@ TEETH_SHOW_M = 0.0032
 ARCH_DEPTH_M = 0.022
 """How far the dental arch curves back from the midline to ``x`` = the mouth's half-width, metres."""
 CAVITY_FLARE = (0.3, 0.3, 0.0)
-"""How much wider and taller (x, y) the mouth cavity's back is than its front: a pear lying behind the lips. What
-is seen through the slit is the back, wide and tall enough for a smile's stretched, raised corners (Table 1 joy
-at 2.4: 10 mm out, 17 mm up) and for an oblique view past the far corner; the front stays as narrow as the lips,
-behind the cheeks that a smile pulls back and in front of nothing the open jaw shows."""
+"""How much wider and taller (x, y; 0.3 = 30 %) the mouth cavity's back is than its front: a pear lying behind the
+lips. What is seen through the slit is the back, wide and tall enough for a smile's stretched, raised corners
+(Table 1 joy at 2.4: 10 mm out, 17 mm up); the front is narrower than the lips' width (1.3 half-widths), so it
+stays behind the cheeks that a smile pulls back (a wider front poked through them as dark creases)."""
 
 # Teeth of one side of each row, midline outward: width along the arch, crown height, labio-lingual
 # thickness, and how far the edge stands back from the central incisor's (toward the gum), all metres.
