@@ -68,11 +68,14 @@ def test_peak_face_keeps_prototype_proportions_at_the_strong_condition() -> None
     assert features is not None and np.abs(features).max() > 0
 
 
+def _need_render_and_detect() -> None:
+    for module in ("moderngl", "ai_edge_litert", "mediapipe"):
+        pytest.importorskip(module)
+
+
 @pytest.fixture(scope="module")
 def ict_frontal(ict_dir, landmarker_path, emotion_model_path) -> RecognitionResult:
-    pytest.importorskip("moderngl")
-    pytest.importorskip("ai_edge_litert")
-    pytest.importorskip("mediapipe")
+    _need_render_and_detect()
     stimuli = study_stimuli([("ict", "a")], ("facs",), ("frontal-1m", "frontal-3m"), (1.2, 2.4), (*FIVE, "disgust"))
     return run_recognition(stimuli, size=(384, 384), progress=False)
 
@@ -88,9 +91,7 @@ def test_quick_validation_five_emotions_frontal(ict_frontal: RecognitionResult) 
 
 @pytest.fixture(scope="module")
 def builtin_feature_points(landmarker_path, emotion_model_path) -> RecognitionResult:
-    pytest.importorskip("moderngl")
-    pytest.importorskip("ai_edge_litert")
-    pytest.importorskip("mediapipe")
+    _need_render_and_detect()
     stimuli = study_stimuli([("builtin", "default")], ("feature_points",), ("frontal-1m",), (1.2, 2.4), FIVE)
     return run_recognition(stimuli, size=(384, 384), progress=False)
 

@@ -368,8 +368,8 @@ class FeaturePointRig:
             outside[region] = False
             field[(outside & ~fixed) | ~surface] = 0.0
             if spec.name == "Jaw":
-                inside = _jaw_carried(rig, anchors[f], surface)
-                field[inside[0]] = inside[1][:, None]
+                carried, shares = _jaw_carried(rig, anchors[f], surface)
+                field[carried] = shares[:, None]
             keep = np.flatnonzero(np.abs(field).max(axis=1) > 1e-4)
             ids_out.append(keep.astype(np.int32))
             weights_out.append(field[keep].astype(np.float32))
