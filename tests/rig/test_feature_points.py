@@ -14,6 +14,7 @@ from mien.rig.builtin_head import builtin_head
 from mien.rig.feature_points import (
     FEATURE_NAMES,
     FeaturePointRig,
+    band_specs,
     feature_specs,
     feature_target_names,
     table1_weights,
@@ -150,6 +151,25 @@ def test_angry_pulls_inner_brows_together_and_down(head: tuple[Rig, FeaturePoint
     d = deform(rig, table1_weights(table1("angry"), 1.0))
     assert d[rig.landmarks[22], 0] < -0.005 < 0.005 < d[rig.landmarks[21], 0]
     assert d[rig.landmarks[22], 1] < -0.005
+
+
+def test_a_brow_moves_as_a_band(head: tuple[Rig, FeaturePointRig]) -> None:
+    """Table 1 moves a brow's two ends; its middle (MPEG-4 4.3/4.4) follows their mean, not sagging to the lid.
+
+    Before the bands (mpeg4_bands.csv), surprise raised both ends 12 mm at 2.4 and the middle only 4 mm on ICT.
+    """
+    rig, _ = head
+    for emotion, intensity in (("surprise", 2.4), ("sad", 1.2)):
+        d = deform(rig, table1_weights(table1(emotion), intensity))[:, 1]
+        for inner, middle, outer in ((22, 24, 26), (21, 19, 17)):
+            a, b = d[rig.landmarks[inner]], d[rig.landmarks[outer]]  # the middle sits about halfway along
+            assert abs(d[rig.landmarks[middle]] - 0.5 * (a + b)) < 0.15 * (abs(a) + abs(b)), (emotion, middle)
+
+
+def test_bands_name_their_features() -> None:
+    specs = band_specs()
+    assert [b.name for b in specs] == ["BrowLeft", "BrowRight"]
+    assert all(end in FEATURE_NAMES for b in specs for end in b.ends)
 
 
 def test_regions_respect_mouth_and_lids(head: tuple[Rig, FeaturePointRig]) -> None:

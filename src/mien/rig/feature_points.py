@@ -9,8 +9,10 @@ without hand rigging.
 **The deformation rule.** Each feature's field is the smoothest surface function (biharmonic,
 :mod:`mien.rig.harmonic`) that is 1 on the feature's plateau (the anchor and the skin within ``plateau_m``),
 holds every other feature's anchor (the skin within :data:`CORE_M`) at that feature's share (0, or the csv
-``rides`` share: the lower lip rides the jaw, the mouth corners half, the upper lip points a corner's rise)
-and every lid margin still (a lid feature moves its own margin with a raised-cosine falloff along it), and is
+``rides`` share: the lower lip rides the jaw, the mouth corners half, the upper lip points a corner's rise),
+each brow's strip of skin (``data/mpeg4_bands.csv``, within :data:`BAND_M` of its landmark chain) at the share
+of its two end features by its place along the brow (so a brow moves as a band, its middle never sagging
+toward the lid; the end features' regions reach from the whole strip) and every lid margin still (a lid feature moves its own margin with a raised-cosine falloff along it), and is
 0 beyond a geodesic radius. So each anchor moves exactly by its own Table 1 vector (plus its shares of the
 features it rides), the skin between anchors follows the smoothest interpolation of their moves (a lip keeps
 its curve; the glabella between two inner brows closing in is compressed evenly, not folded), and the mouth
@@ -69,8 +71,10 @@ from mien.rig.model import MorphTarget, Rig
 __all__ = [
     "AXES",
     "FEATURE_NAMES",
+    "BandSpec",
     "FeaturePointRig",
     "FeatureSpec",
+    "band_specs",
     "feature_rooms",
     "feature_specs",
     "feature_target_names",
@@ -92,6 +96,8 @@ PLATEAU_SIDE_MARGIN_M = 0.006
 CORE_M = 0.003
 """Geodesic radius (m) of the patch around another feature's anchor that a feature's field holds at that
 feature's share (its own plateau, e.g. the jaw's whole chin, binds only its own field)."""
+BAND_M = 0.003
+"""Geodesic half-width (m) of a band (``data/mpeg4_bands.csv``): the skin held at its ends' shares, about a brow."""
 JAW_TARGET = "jawOpen"
 """The head's own target whose off-surface moves (lower teeth, tongue) the Jaw feature carries."""
 MIDLINE_LANDMARKS = (27, 28, 29, 30)
@@ -136,19 +142,28 @@ def _ints(text: str) -> tuple[int, ...]:
     return tuple(int(t) for t in text.split())
 
 
+def _rides(text: str) -> tuple[tuple[str, tuple[float, float, float]], ...]:
+    """``"Jaw 1; LipCornerLeft 0 0.35 0"`` -> per feature its share along rig x, y, z (one share: all three)."""
+    rides = []
+    for part in text.split(";"):
+        words = part.split()
+        if words:
+            shares = [float(w) for w in words[1:]]
+            x, y, z = (shares * 3)[:3] if len(shares) == 1 else shares
+            rides.append((words[0], (float(x), float(y), float(z))))
+    return tuple(rides)
+
+
+def _data_rows(name: str) -> list[dict[str, str]]:
+    text = resources.files("mien.rig").joinpath(f"data/{name}").read_text(encoding="utf-8")
+    return list(csv.DictReader(line for line in text.splitlines() if not line.startswith("#")))
+
+
 @cache
 def feature_specs() -> tuple[FeatureSpec, ...]:
     """The 18 feature specs from ``data/mpeg4_features.csv``, in Broekens' Table 1 order."""
-    text = resources.files("mien.rig").joinpath("data/mpeg4_features.csv").read_text(encoding="utf-8")
-    rows = csv.DictReader(line for line in text.splitlines() if not line.startswith("#"))
     specs = []
-    for row in rows:
-        rides = []
-        for part in row["rides"].split(";"):
-            words = part.split()
-            if words:
-                shares = [float(w) for w in words[1:]]
-                rides.append((words[0], (shares * 3)[:3] if len(shares) == 1 else tuple(shares)))
+    for row in _data_rows("mpeg4_features.csv"):
         specs.append(
             FeatureSpec(
                 name=row["feature"],
@@ -158,7 +173,7 @@ def feature_specs() -> tuple[FeatureSpec, ...]:
                 plateau_m=float(row["plateau_m"]),
                 closer_to=_ints(row["closer_to"]),
                 than=_ints(row["than"]),
-                rides=tuple((name, (float(x), float(y), float(z))) for name, (x, y, z) in rides),
+                rides=_rides(row["rides"]),
                 margin=_ints(row["margin"]),
                 barrier=_ints(row["barrier"]),
                 toward=row["toward"].strip(),
@@ -171,6 +186,34 @@ def feature_specs() -> tuple[FeatureSpec, ...]:
 
 FEATURE_NAMES: tuple[str, ...] = tuple(spec.name for spec in feature_specs())
 """The 18 feature names in Table 1 order: ``Jaw``, ``Nostrils``, ``LipLowerLeft``, ... ``BrowOuterRight``."""
+
+
+@dataclass(frozen=True)
+class BandSpec:
+    """One row of ``data/mpeg4_bands.csv``: a strip of skin between two features that moves as a band."""
+
+    name: str
+    """Band name (``BrowLeft``...)."""
+    mpeg4_fp: str
+    """MPEG-4 feature points on it (``4.1 4.3 4.5``)."""
+    chain: tuple[int, ...]
+    """0-based iBUG-68 landmarks along it, from the first end's feature to the last's."""
+    ends: tuple[str, str]
+    """The features at the chain's first and last landmark."""
+
+
+@cache
+def band_specs() -> tuple[BandSpec, ...]:
+    """The bands from ``data/mpeg4_bands.csv`` (the two brows)."""
+    bands = []
+    for row in _data_rows("mpeg4_bands.csv"):
+        first, last = row["ends"].split()
+        band = BandSpec(row["band"], row["mpeg4_fp"], _ints(row["chain"]), (first, last))
+        for feature in band.ends:
+            if feature not in FEATURE_NAMES:
+                raise UnknownNameError(f"feature at an end of band {band.name}", feature, FEATURE_NAMES)
+        bands.append(band)
+    return tuple(bands)
 
 
 def feature_target_names() -> tuple[str, ...]:
@@ -285,6 +328,19 @@ def _chain(graph: EdgeGraph, landmarks: np.ndarray, chain: tuple[int, ...]) -> n
     return np.unique(np.concatenate(ids))
 
 
+def _band(graph: EdgeGraph, neutral: np.ndarray, landmarks: np.ndarray, band: BandSpec) -> tuple[np.ndarray, np.ndarray]:
+    """``(ids, along)``: the surface vertices within :data:`BAND_M` of ``band``'s landmark chain, and each one's
+    place along the chain (0 at its first landmark, 1 at its last), by the arc length of the nearest chain vertex."""
+    path = [np.asarray([landmarks[band.chain[0]]])]
+    for a, b in itertools.pairwise(band.chain):
+        path.append(graph.path(int(landmarks[a]), int(landmarks[b]))[1:])
+    chain = np.concatenate(path)
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(neutral[chain], axis=0), axis=1))])
+    ids = np.flatnonzero(graph.distances(chain, limit_m=BAND_M) <= BAND_M)
+    nearest = np.argmin(np.linalg.norm(neutral[ids, None] - neutral[chain][None], axis=2), axis=1)
+    return ids, arc[nearest] / max(float(arc[-1]), 1e-9)
+
+
 @dataclass(frozen=True, eq=False)
 class FeaturePointRig:
     """Anchors and smooth fields of the 18 feature points on one mesh."""
@@ -329,10 +385,11 @@ class FeaturePointRig:
         for spec in specs:
             point = neutral[landmarks[list(spec.landmarks)]].mean(axis=0)
             anchors.append(int(candidates[np.argmin(np.linalg.norm(neutral[candidates] - point, axis=1))]))
-        plateaus, cores, radius = [], [], np.zeros(len(specs))
+        bands = [_band(graph, neutral, landmarks, band) for band in band_specs()]
+        plateaus, cores, radius, plateau_m = [], [], np.zeros(len(specs)), np.zeros(len(specs))
         for f, spec in enumerate(specs):
             small = float(overrides.get(spec.name, spec.radius_m))
-            plateau = min(spec.plateau_m, 0.5 * small)
+            plateau = plateau_m[f] = min(spec.plateau_m, 0.5 * small)
             radius[f] = np.clip(plateau + SPREAD * reach[f], small, GROWTH_LIMIT * small)
             ids = np.flatnonzero(graph.distances([anchors[f]], limit_m=plateau) <= plateau)
             cores.append(ids[graph.distances([anchors[f]], limit_m=CORE_M)[ids] <= CORE_M])
@@ -348,6 +405,9 @@ class FeaturePointRig:
         ids_out, weights_out = [], []
         for f, spec in enumerate(specs):
             dist = graph.distances([anchors[f]], limit_m=float(radius[f]))
+            for band, (ids, _) in zip(band_specs(), bands, strict=True):  # a band end's region reaches along it
+                if spec.name in band.ends:
+                    dist = np.minimum(dist, graph.distances(ids, limit_m=float(radius[f])) + plateau_m[f])
             region = np.flatnonzero(dist < radius[f])
             values = np.zeros((rig.n_vertices, 3))
             fixed = np.zeros(rig.n_vertices, bool)
@@ -360,6 +420,11 @@ class FeaturePointRig:
                 if g != f:  # the other anchors (their cores) hold still or ride this feature by their share
                     fixed[cores[g]] = True
                     values[cores[g]] = dict(other.rides).get(spec.name, (0.0, 0.0, 0.0))
+            for band, (ids, along) in zip(band_specs(), bands, strict=True):  # still, or this end's share
+                fixed[ids] = True
+                values[ids] = 0.0
+                if spec.name in band.ends:
+                    values[ids] = (along if band.ends[1] == spec.name else 1.0 - along)[:, None]
             fixed[plateaus[f]] = True
             values[plateaus[f]] = 1.0
             fixed_ids = np.flatnonzero(fixed)
