@@ -12,8 +12,8 @@ holds every other feature's anchor (the skin within :data:`CORE_M`) at that feat
 ``rides`` share: the lower lip rides the jaw, the mouth corners half, the upper lip points a corner's rise),
 each brow's strip of skin (``data/mpeg4_bands.csv``, within :data:`BAND_M` of its landmark chain) at the share
 of its two end features by its place along the brow (so a brow moves as a band, its middle never sagging
-toward the lid; the end features' regions reach from the whole strip) and every lid margin still (a lid feature moves its own margin with a raised-cosine falloff along it), and is
-0 beyond a geodesic radius. So each anchor moves exactly by its own Table 1 vector (plus its shares of the
+toward the lid; the end features' regions reach from the whole strip) and every lid margin still (a lid
+feature moves its own margin with a raised-cosine falloff along it), and is 0 beyond a geodesic radius. So each anchor moves exactly by its own Table 1 vector (plus its shares of the
 features it rides), the skin between anchors follows the smoothest interpolation of their moves (a lip keeps
 its curve; the glabella between two inner brows closing in is compressed evenly, not folded), and the mouth
 slit and eye openings are natural boundaries (the field couples only vertices joined by triangles). Off the
@@ -328,7 +328,9 @@ def _chain(graph: EdgeGraph, landmarks: np.ndarray, chain: tuple[int, ...]) -> n
     return np.unique(np.concatenate(ids))
 
 
-def _band(graph: EdgeGraph, neutral: np.ndarray, landmarks: np.ndarray, band: BandSpec) -> tuple[np.ndarray, np.ndarray]:
+def _band(
+    graph: EdgeGraph, neutral: np.ndarray, landmarks: np.ndarray, band: BandSpec
+) -> tuple[np.ndarray, np.ndarray]:
     """``(ids, along)``: the surface vertices within :data:`BAND_M` of ``band``'s landmark chain, and each one's
     place along the chain (0 at its first landmark, 1 at its last), by the arc length of the nearest chain vertex."""
     path = [np.asarray([landmarks[band.chain[0]]])]
