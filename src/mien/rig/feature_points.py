@@ -13,8 +13,8 @@ holds every other feature's anchor (the skin within :data:`CORE_M`) at that feat
 each brow's strip of skin (``data/mpeg4_bands.csv``, within :data:`BAND_M` of its landmark chain) at the share
 of its two end features by its place along the brow (so a brow moves as a band, its middle never sagging
 toward the lid; the end features' regions reach from the whole strip) and every lid margin still (a lid
-feature moves its own margin with a raised-cosine falloff along it), and is 0 beyond a geodesic radius. So each anchor moves exactly by its own Table 1 vector (plus its shares of the
-features it rides), the skin between anchors follows the smoothest interpolation of their moves (a lip keeps
+feature moves its own margin with a raised-cosine falloff along it), and is 0 beyond a geodesic radius. So
+each anchor moves exactly by its own Table 1 vector (plus its shares of the features it rides), the skin between anchors follows the smoothest interpolation of their moves (a lip keeps
 its curve; the glabella between two inner brows closing in is compressed evenly, not folded), and the mouth
 slit and eye openings are natural boundaries (the field couples only vertices joined by triangles). Off the
 face surface only the Jaw moves anything: it carries the lower teeth and tongue by the head's own jaw-opening
