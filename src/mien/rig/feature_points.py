@@ -7,21 +7,21 @@ says which, with the MPEG-4 feature point it stands for), so any mesh with a lan
 without hand rigging.
 
 **The deformation rule.** Each feature's field is the smoothest surface function (biharmonic,
-:mod:`mien.rig.harmonic`) that is 1 on the feature's plateau (the anchor and the skin within ``plateau_m``),
-holds every other feature's anchor (the skin within :data:`CORE_M`) at that feature's share (0, or the csv
-``rides`` share: the lower lip rides the jaw, the mouth corners half, the upper lip points a corner's rise),
-each brow's strip of skin (``data/mpeg4_bands.csv``, within :data:`BAND_M` of its landmark chain) at the share
-of its two end features by its place along the brow (so a brow moves as a band, its middle never sagging
-toward the lid; the end features' regions reach from the whole strip) and every lid margin still (a lid
-feature moves its own margin with a raised-cosine falloff along it), and is 0 beyond a geodesic radius. So
-each anchor moves exactly by its own Table 1 vector (plus its shares of the features it rides), the skin between anchors follows the smoothest interpolation of their moves (a lip keeps
-its curve; the glabella between two inner brows closing in is compressed evenly, not folded), and the mouth
-slit and eye openings are natural boundaries (the field couples only vertices joined by triangles). Off the
-face surface only the Jaw moves anything: it carries the lower teeth and tongue by the head's own jaw-opening
-target's shares (:data:`JAW_TARGET`), so an open mouth shows the teeth parted, not clenched behind the lips. The
-smoothest field overshoots a little beyond a held neighbour (at most about 0.2 of a feature's move, the
-other way). Summed per-feature falloffs (mien 0.1) put a kink wherever a region was capped or cut and
-bunched the skin between neighbouring anchors: creases, flaps, a bow-tie mouth.
+:mod:`mien.rig.harmonic`) that is 1 on the feature's plateau (the anchor and the skin within ``plateau_m``), holds
+every other feature's anchor (the skin within :data:`CORE_M`) at that feature's share (0, or the csv ``rides``
+share: the lower lip rides the jaw, the mouth corners half, the upper lip points a corner's rise), each brow's strip
+of skin (``data/mpeg4_bands.csv``, within :data:`BAND_M` of its landmark chain) at the share of its two end features
+by its place along the brow (so a brow moves as a band, its middle never sagging toward the lid; the end features'
+regions reach from the whole strip) and every lid margin still (a lid feature moves its own margin with a
+raised-cosine falloff along it), and is 0 beyond a geodesic radius. So each anchor moves exactly by its own Table 1
+vector (plus its shares of the features it rides), the skin between anchors follows the smoothest interpolation of
+their moves (a lip keeps its curve; the glabella between two inner brows closing in is compressed evenly, not
+folded), and the mouth slit and eye openings are natural boundaries (the field couples only vertices joined by
+triangles). Off the face surface only the Jaw moves anything: it carries the lower teeth and tongue by the head's
+own jaw-opening target's shares (:data:`JAW_TARGET`), so an open mouth shows the teeth parted, not clenched behind
+the lips. The smoothest field overshoots a little beyond a held neighbour (at most about 0.2 of a feature's move,
+the other way). Summed per-feature falloffs (mien 0.1) put a kink wherever a region was capped or cut and bunched
+the skin between neighbouring anchors: creases, flaps, a bow-tie mouth.
 
 Each region is wide enough for its largest design move ``D`` (over the six emotions and four blends at
 :data:`DESIGN_INTENSITY`, after the limits below): ``R = P + SPREAD * D``, between the csv radius and
