@@ -166,10 +166,18 @@ def test_a_brow_moves_as_a_band(head: tuple[Rig, FeaturePointRig]) -> None:
             assert abs(d[rig.landmarks[middle]] - 0.5 * (a + b)) < 0.15 * (abs(a) + abs(b)), (emotion, middle)
 
 
-def test_bands_name_their_features() -> None:
-    specs = band_specs()
-    assert [b.name for b in specs] == ["BrowLeft", "BrowRight"]
-    assert all(end in FEATURE_NAMES for b in specs for end in b.ends)
+def test_band_place_runs_along_the_brow(head: tuple[Rig, FeaturePointRig]) -> None:
+    """A band's share goes from 0 at its first landmark (the inner brow) to 1 at its last, rising along the brow."""
+    from mien.rig.feature_points import _band
+
+    rig, _ = head
+    graph = EdgeGraph.from_mesh(rig.neutral, rig.faces)
+    landmarks = np.asarray(rig.landmarks, dtype=np.int64)
+    for band in band_specs():
+        ids, along = _band(graph, np.asarray(rig.neutral, np.float64), landmarks, band)
+        place = [float(along[np.flatnonzero(ids == landmarks[i])[0]]) for i in band.chain]
+        assert place[0] == 0.0 and place[-1] == 1.0 and place == sorted(place), (band.name, place)
+        assert 0.3 < place[2] < 0.7, (band.name, place)
 
 
 def test_regions_respect_mouth_and_lids(head: tuple[Rig, FeaturePointRig]) -> None:

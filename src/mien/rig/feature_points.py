@@ -321,11 +321,12 @@ def _jaw_carried(rig: Rig, chin: int, surface: np.ndarray) -> tuple[np.ndarray, 
 
 
 def _chain(graph: EdgeGraph, landmarks: np.ndarray, chain: tuple[int, ...]) -> np.ndarray:
-    """Vertex ids along a chain of landmarks joined by shortest edge paths (a lid margin stays on its lid)."""
-    ids = [landmarks[list(chain)]]
+    """Vertex ids in order along a chain of landmarks joined by shortest edge paths (a lid margin stays on its
+    lid), from its first landmark to its last."""
+    path = [np.asarray([landmarks[chain[0]]], dtype=np.int64)]
     for a, b in itertools.pairwise(chain):
-        ids.append(graph.path(int(landmarks[a]), int(landmarks[b])))
-    return np.unique(np.concatenate(ids))
+        path.append(graph.path(int(landmarks[a]), int(landmarks[b]))[1:])
+    return np.concatenate(path)
 
 
 def _band(
@@ -333,10 +334,7 @@ def _band(
 ) -> tuple[np.ndarray, np.ndarray]:
     """``(ids, along)``: the surface vertices within :data:`BAND_M` of ``band``'s landmark chain, and each one's
     place along the chain (0 at its first landmark, 1 at its last), by the arc length of the nearest chain vertex."""
-    path = [np.asarray([landmarks[band.chain[0]]])]
-    for a, b in itertools.pairwise(band.chain):
-        path.append(graph.path(int(landmarks[a]), int(landmarks[b]))[1:])
-    chain = np.concatenate(path)
+    chain = _chain(graph, landmarks, band.chain)
     arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(neutral[chain], axis=0), axis=1))])
     ids = np.flatnonzero(graph.distances(chain, limit_m=BAND_M) <= BAND_M)
     nearest = np.argmin(np.linalg.norm(neutral[ids, None] - neutral[chain][None], axis=2), axis=1)
