@@ -462,26 +462,36 @@ function buildLaughter(types) {
 function buildIdle(toggles) {
   const box = $("idle-toggles");
   const inputs = [];
+  let generation = 0;  // a later switch supersedes an earlier one's read-back
   const sendIdle = async () => {
     const settings = {};
     for (const { input, flags } of inputs) for (const flag of flags) settings[flag] = input.checked;
     send({ idle: settings });
     // Read back what the server holds (a server without the idle command keeps the character's setting).
+    // A busy server may take a moment, so ask a few times before saying it did not take the switch.
+    const mine = ++generation;
     const id = state.character;
-    await new Promise((resolve) => setTimeout(resolve, 400));
-    try {
-      const list = await api("GET", "/api/characters");
-      const entry = (Array.isArray(list) ? list : []).find((e) => String(characterId(e)) === id);
-      if (!entry) return;
-      state.characters.set(id, entry);
-      const held = entry.idle_parts || {};
-      const taken = Object.entries(settings).every(([flag, on]) => !(flag in held) || held[flag] === on);
-      if (!taken || !entry.idle_parts) {
-        setStatus(`this server cannot switch idle live: ${id} keeps idle ${entry.idle ? "on" : "off"}`);
-        showIdle(entry);
+    for (let attempt = 0; attempt < 6; attempt++) {
+      await new Promise((resolve) => setTimeout(resolve, 300));
+      if (mine !== generation || id !== state.character) return;
+      try {
+        const list = await api("GET", "/api/characters");
+        if (mine !== generation || id !== state.character) return;
+        const entry = (Array.isArray(list) ? list : []).find((e) => String(characterId(e)) === id);
+        if (!entry) return;
+        state.characters.set(id, entry);
+        const held = entry.idle_parts;
+        const taken = held && Object.entries(settings).every(([flag, on]) => !(flag in held) || held[flag] === on);
+        if (taken) return;
+        if (!held || attempt === 5) {
+          setStatus(`this server cannot switch idle live: ${id} keeps idle ${entry.idle ? "on" : "off"}`);
+          showIdle(entry);
+          return;
+        }
+      } catch (error) {
+        setStatus(error.message);
+        return;
       }
-    } catch (error) {
-      setStatus(error.message);
     }
   };
   for (const toggle of toggles) {
