@@ -369,8 +369,12 @@ def test_idle_switches_follow_the_server(open_page: Opener, live: Live) -> None:
         time.sleep(0.1)
     assert parts == {"blink": True, "mouth": False, "eyelids": False, "neck": False, "gaze": False, "wobble": False}
     page.click("#idle-toggles input[data-idle=blink]")
-    page.wait_for_timeout(600)
-    assert not any({c["id"]: c["idle_parts"] for c in _get(f"{live.url}/api/characters")}[THIRD].values())
+    deadline = time.monotonic() + 5.0
+    while time.monotonic() < deadline and any(parts.values()):
+        parts = {c["id"]: c["idle_parts"] for c in _get(f"{live.url}/api/characters")}[THIRD]
+        time.sleep(0.1)
+    assert not any(parts.values())
+    page.wait_for_timeout(2500)  # past the page's last read-back (6 tries, 0.3 s apart)
     assert "cannot" not in page.locator("#status-message").inner_text()
 
 
