@@ -19,9 +19,7 @@ import argparse
 import asyncio
 import os
 import random
-import shutil
 import signal
-import socket
 import statistics
 import subprocess
 import sys
@@ -49,12 +47,6 @@ ARRIVAL_S = 10.0
 THINK_S = (2.0, 6.0)
 """Seconds between a stimulus's play and its answer (uniform). People in the Broekens study took 15-30
 minutes for 60 stimuli (15-30 s each); 2-6 s is 5x faster than that, so the load is pessimistic."""
-
-
-def free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return int(probe.getsockname()[1])
 
 
 def percentile(values: list[float], q: float) -> float:
@@ -107,6 +99,8 @@ async def run_participants(url: str, n: int) -> tuple[dict[str, list[float]], in
 def start_server(design: Path, db: str) -> tuple[subprocess.Popen[bytes], str]:
     import httpx
 
+    from mien.study._postgres import free_port
+
     port = free_port()
     command = [sys.executable, "-m", "mien.cli", "study", "serve", str(design), "--db", db, "--port", str(port)]
     process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
@@ -121,34 +115,6 @@ def start_server(design: Path, db: str) -> tuple[subprocess.Popen[bytes], str]:
         except httpx.HTTPError:
             time.sleep(0.1)
     raise SystemExit("server did not start in 60 s")
-
-
-def start_postgres(folder: Path) -> tuple[str, list[str], str] | None:
-    """(URL, pg_ctl stop command prefix, data folder) of a new PostgreSQL server, or None without binaries."""
-
-    def binary(name: str) -> str | None:
-        found = shutil.which(name)
-        candidates = sorted(Path("/usr/lib/postgresql").glob(f"*/bin/{name}"))
-        return found or (str(candidates[-1]) if candidates else None)
-
-    initdb, pg_ctl = binary("initdb"), binary("pg_ctl")
-    if initdb is None or pg_ctl is None:
-        return None
-    as_user: list[str] = []
-    if os.geteuid() == 0:
-        shutil.chown(folder, "postgres")
-        as_user = ["runuser", "-u", "postgres", "--"]
-    data, port = folder / "data", free_port()
-    subprocess.run(
-        [*as_user, initdb, "-D", str(data), "-U", "postgres", "-A", "trust"], check=True, capture_output=True
-    )
-    options = f"-p {port} -h 127.0.0.1 -k {folder} -c max_connections=200"
-    subprocess.run(
-        [*as_user, pg_ctl, "-D", str(data), "-o", options, "-l", str(folder / "log"), "-w", "start"],
-        check=True,
-        capture_output=True,
-    )
-    return f"postgresql+psycopg://postgres@127.0.0.1:{port}/postgres", [*as_user, pg_ctl], str(data)
 
 
 def measure(name: str, design: Path, db: str, n: int, n_stimuli: int) -> None:
@@ -183,6 +149,7 @@ def measure(name: str, design: Path, db: str, n: int, n_stimuli: int) -> None:
 
 
 def main() -> None:
+    from mien.study._postgres import postgres_available, temporary_postgres
     from mien.study.design import load_design
     from mien.study.stimuli import make_stimuli
 
@@ -200,19 +167,11 @@ def main() -> None:
         measure("SQLite", design_path, f"sqlite:///{folder / 'bench.sqlite'}", args.participants, n_stimuli)
         if args.no_postgres:
             return
-        pg_folder = Path(tempfile.mkdtemp(prefix="mien-bench-pg-"))  # not inside a 0700 folder: postgres reads it
-        try:
-            started = start_postgres(pg_folder)
-            if started is None:
-                print("PostgreSQL: server binaries not found, skipped")
-                return
-            url, pg_ctl, data = started
-            try:
-                measure("PostgreSQL", design_path, url, args.participants, n_stimuli)
-            finally:
-                subprocess.run([*pg_ctl, "-D", data, "-m", "fast", "stop"], capture_output=True)
-        finally:
-            shutil.rmtree(pg_folder, ignore_errors=True)
+        if not postgres_available():
+            print("PostgreSQL: server binaries not found, skipped")
+            return
+        with temporary_postgres(prefix="mien-bench-pg-", max_connections=200) as url:
+            measure("PostgreSQL", design_path, url, args.participants, n_stimuli)
 
 
 if __name__ == "__main__":

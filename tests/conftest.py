@@ -3,10 +3,6 @@
 from __future__ import annotations
 
 import os
-import shutil
-import socket
-import subprocess
-import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -100,49 +96,16 @@ def chromium() -> Iterator[object]:
             browser.close()
 
 
-def free_port() -> int:
-    """A free TCP port on 127.0.0.1 (for servers a test starts)."""
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
-        probe.bind(("127.0.0.1", 0))
-        return int(probe.getsockname()[1])
-
-
-def _postgres_bin(name: str) -> str | None:
-    found = shutil.which(name)
-    if found:
-        return found
-    candidates = sorted(Path("/usr/lib/postgresql").glob(f"*/bin/{name}"))
-    return str(candidates[-1]) if candidates else None
-
-
 @pytest.fixture(scope="session")
 def postgres_url() -> Iterator[str]:
     """A real PostgreSQL server started for this test session in a temporary folder (Debian's package).
 
     Yields a SQLAlchemy URL (``postgresql+psycopg://postgres@127.0.0.1:PORT/postgres``); the server is
-    stopped and its folder removed afterwards. PostgreSQL refuses to run as root, so as root the server
-    runs as the ``postgres`` system user.
+    stopped and its folder removed afterwards (see :func:`mien.study._postgres.temporary_postgres`).
     """
-    initdb, pg_ctl = _postgres_bin("initdb"), _postgres_bin("pg_ctl")
-    if initdb is None or pg_ctl is None:
+    from mien.study._postgres import postgres_available, temporary_postgres
+
+    if not postgres_available():
         pytest.skip("PostgreSQL server binaries not found: apt install postgresql (scripts/install does)")
-    as_user: list[str] = []
-    folder = Path(tempfile.mkdtemp(prefix="mien-pg-"))
-    if os.geteuid() == 0:
-        shutil.chown(folder, "postgres")
-        as_user = ["runuser", "-u", "postgres", "--"]
-    data, port = folder / "data", free_port()
-    subprocess.run(
-        [*as_user, initdb, "-D", str(data), "-U", "postgres", "-A", "trust"], check=True, capture_output=True
-    )
-    options = f"-p {port} -h 127.0.0.1 -k {folder}"
-    subprocess.run(
-        [*as_user, pg_ctl, "-D", str(data), "-o", options, "-l", str(folder / "log"), "-w", "start"],
-        check=True,
-        capture_output=True,
-    )
-    try:
-        yield f"postgresql+psycopg://postgres@127.0.0.1:{port}/postgres"
-    finally:
-        subprocess.run([*as_user, pg_ctl, "-D", str(data), "-m", "fast", "-w", "stop"], capture_output=True)
-        shutil.rmtree(folder, ignore_errors=True)
+    with temporary_postgres() as url:
+        yield url
