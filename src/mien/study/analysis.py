@@ -25,7 +25,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -350,14 +350,21 @@ def analyze(
             if name != "expression" and name not in factor_columns:
                 raise UnknownNameError(f"design factor (columns of {source})", name, ("expression", *factor_columns))
     levels = {c: tuple(sorted(set(checked[c]), key=_level_key)) for c in factor_columns}
+    common = StudyAnalysis(
+        study=str(checked["study"].iloc[0]),
+        protocol=protocol,
+        n_participants=int(checked["participant"].nunique()),
+        n_answers=len(checked),
+        factors=tuple(factors),
+        factor_levels=levels,
+        source=source,
+        source_sha256=source_sha256,
+        notes=tuple(notes),
+    )
     trials = trials_frame(checked)
-    n_participants = int(checked["participant"].nunique())
-    study = str(checked["study"].iloc[0])
     if protocol == "broekens":
-        return _analyze_broekens(
-            checked, trials, factors, levels, study, n_participants, source, source_sha256, notes
-        )  # fmt: skip
-    return _analyze_mascaro(checked, trials, factors, levels, study, n_participants, source, source_sha256, notes)
+        return _analyze_broekens(common, checked, trials)
+    return _analyze_mascaro(common, trials)
 
 
 def _level_key(text: str) -> tuple[int, float, str]:
@@ -367,18 +374,10 @@ def _level_key(text: str) -> tuple[int, float, str]:
         return 1, 0.0, text
 
 
-def _analyze_broekens(
-    checked: pd.DataFrame,
-    trials: pd.DataFrame,
-    factors: list[str],
-    levels: dict[str, tuple[str, ...]],
-    study: str,
-    n_participants: int,
-    source: str,
-    source_sha256: str,
-    notes: list[str],
-) -> StudyAnalysis:
+def _analyze_broekens(common: StudyAnalysis, checked: pd.DataFrame, trials: pd.DataFrame) -> StudyAnalysis:
+    """``common`` (the fields every protocol fills) completed with the Broekens tables of ``checked``."""
     pd = _need_pandas()
+    factors, levels, notes = common.factors, common.factor_levels, list(common.notes)
     labels = _label_order([q for q in set(checked["question"]) if q.startswith(LABEL_PREFIX)])
     asked = [*labels, "naturalness"]
     present = [q for q in asked if q in trials.columns]
@@ -389,7 +388,7 @@ def _analyze_broekens(
     complete = trials[complete_mask].copy()
     if complete.empty:
         raise InvalidValueError(
-            f"answers in {source}", "no complete trial", "at least one stimulus with every label rated"
+            f"answers in {common.source}", "no complete trial", "at least one stimulus with every label rated"
         )
     expressions = _expression_order(complete["expression"].tolist(), labels)
     complete["expression"] = pd.Categorical(complete["expression"], categories=expressions, ordered=True)
@@ -414,24 +413,16 @@ def _analyze_broekens(
             break
     if not factors:
         notes.append("no within-subject factor with two levels: no condition ANOVA")
-    return StudyAnalysis(
-        study, "broekens", n_participants, len(checked), tuple(factors), levels, tuple(labels), quality, profile,
-        naturalness, anova, expression_anova, None, complete, incomplete, source, source_sha256, tuple(notes),
+    return replace(
+        common, labels=tuple(labels), quality=quality, profile=profile, naturalness=naturalness, anova=anova,
+        expression_anova=expression_anova, trials=complete, incomplete_trials=incomplete, notes=tuple(notes),
     )  # fmt: skip
 
 
-def _analyze_mascaro(
-    checked: pd.DataFrame,
-    trials: pd.DataFrame,
-    factors: list[str],
-    levels: dict[str, tuple[str, ...]],
-    study: str,
-    n_participants: int,
-    source: str,
-    source_sha256: str,
-    notes: list[str],
-) -> StudyAnalysis:
+def _analyze_mascaro(common: StudyAnalysis, trials: pd.DataFrame) -> StudyAnalysis:
+    """``common`` (the fields every protocol fills) completed with the Mascaró tables of ``trials``."""
     pd = _need_pandas()
+    factors, notes = common.factors, list(common.notes)
     questions = [q for q in QUESTIONS["mascaro"] if q in trials.columns]
     parts = []
     for question in questions:
@@ -442,10 +433,7 @@ def _analyze_mascaro(
     for table in anova.values():
         if table.dropped:
             notes.append(f"ANOVA of {table.measure}: {table.note}")
-    return StudyAnalysis(
-        study, "mascaro", n_participants, len(checked), tuple(factors), levels, (), None, None, None, anova, {},
-        mascaro, trials, 0, source, source_sha256, tuple(notes),
-    )  # fmt: skip
+    return replace(common, anova=anova, mascaro=mascaro, trials=trials, notes=tuple(notes))
 
 
 def analyze_csv(path: str | os.PathLike[str], design_factors: Sequence[str] | None = None) -> StudyAnalysis:
