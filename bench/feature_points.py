@@ -9,9 +9,7 @@ against its 10 s budget (the issue: a feature-point head must be ready in second
 
 from __future__ import annotations
 
-import os
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -20,7 +18,8 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "src"))
 
-from mien.paths import asset_path  # noqa: E402
+from _ict import ict_facekit_folder, temporary_cache  # noqa: E402
+
 from mien.rig.feature_points import FeaturePointRig  # noqa: E402
 from mien.rig.ict_facekit import load_ict_facekit  # noqa: E402
 
@@ -35,12 +34,10 @@ def _timed(run: object) -> float:
 
 
 def main() -> None:
-    folder = asset_path("ict_facekit") or REPO.parent / "shared" / "assets" / "ict-facekit"
-    if not folder.exists():
-        print(f"ICT-FaceKit not found (looked at {folder}); set MIEN_ICT_FACEKIT to run this benchmark")
+    folder = ict_facekit_folder()
+    if folder is None:
         return
-    with tempfile.TemporaryDirectory() as cache:
-        os.environ["MIEN_CACHE_DIR"] = cache
+    with temporary_cache():
         rig = load_ict_facekit(folder)  # writes the cache
         loads, builds = [], []
         for _ in range(REPEATS):

@@ -7,9 +7,7 @@ median of several loads each way and the ratio.
 
 from __future__ import annotations
 
-import os
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -18,7 +16,8 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "src"))
 
-from mien.paths import asset_path  # noqa: E402
+from _ict import ict_facekit_folder, temporary_cache  # noqa: E402
+
 from mien.rig.ict_facekit import ict_identity_presets, load_ict_facekit  # noqa: E402
 
 
@@ -32,12 +31,10 @@ def _median_s(run: object, repeats: int) -> float:
 
 
 def main() -> None:
-    folder = asset_path("ict_facekit") or REPO.parent / "shared" / "assets" / "ict-facekit"
-    if not folder.exists():
-        print(f"ICT-FaceKit not found (looked at {folder}); set MIEN_ICT_FACEKIT to run this benchmark")
+    folder = ict_facekit_folder()
+    if folder is None:
         return
-    with tempfile.TemporaryDirectory() as cache:
-        os.environ["MIEN_CACHE_DIR"] = cache
+    with temporary_cache():
         parse = _median_s(lambda: load_ict_facekit(folder, cache=False), 3)
         load_ict_facekit(folder)  # writes the cache
         cached = _median_s(lambda: load_ict_facekit(folder), 7)
