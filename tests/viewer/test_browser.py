@@ -378,6 +378,33 @@ def test_idle_switches_follow_the_server(open_page: Opener, live: Live) -> None:
     assert "cannot" not in page.locator("#status-message").inner_text()
 
 
+def test_a_server_that_keeps_idle_says_so(open_page: Opener, live: Live) -> None:
+    page = open_page(THIRD).page
+
+    def as_without_the_idle_command(route: Any) -> None:  # no idle_parts, and the character's idle unchanged
+        body = [{**{k: v for k, v in e.items() if k != "idle_parts"}, "idle": False} for e in route.fetch().json()]
+        route.fulfill(status=200, content_type="application/json", body=json.dumps(body))
+
+    page.route("**/api/characters", as_without_the_idle_command)
+    try:
+        page.click("#idle-toggles input[data-idle=blink]")
+        page.wait_for_function(
+            "document.querySelector('#status-message').textContent.includes('cannot switch idle live')", timeout=5000
+        )
+        assert (
+            page.locator("#status-message").inner_text()
+            == f"this server cannot switch idle live: {THIRD} keeps idle off"
+        )
+        assert not page.is_checked("#idle-toggles input[data-idle=blink]")  # the switch shows what the server holds
+    finally:
+        page.unroute("**/api/characters")
+        request = urllib.request.Request(
+            f"{live.url}/api/characters/{THIRD}/idle", json.dumps({"on": False}).encode(), method="POST",
+            headers={"Content-Type": "application/json"},
+        )  # fmt: skip
+        urllib.request.urlopen(request, timeout=10).close()  # the real server took the switch: off again
+
+
 def test_commands_fall_back_to_http_while_the_socket_is_closed(open_page: Opener, live: Live) -> None:
     page = open_page(SECOND).page
     before = _get(f"{live.url}/api/health")["http_commands"]
