@@ -275,12 +275,21 @@ EXPRESSIONS = (
 
 
 def expression_vertices(rig: Rig, fp: FeaturePointRig, name: str, intensity: float) -> np.ndarray:
-    """(n, 3) deformed positions of emotion or blend ``name`` at ``intensity`` through Table 1."""
+    """(n, 3) deformed positions of emotion or blend ``name`` at ``intensity`` through Table 1, as the driver shows
+    it: moves toward a barrier limited, the skin-detail correctives driven."""
     from mien.affect.emotions import emotion_vector
     from mien.affect.table1 import table1_vectors
+    from mien.facs.catalogue import FACE_CHANNELS
+    from mien.rig.driver import RigDriver
+    from mien.rig.fp_correctives import corrective_targets
 
+    full = rig.with_targets(fp.compile())
+    full = full.with_targets(corrective_targets(fp, full))
     vectors = np.tensordot(emotion_vector(name, intensity), table1_vectors(), axes=1)
-    return rig.neutral + fp.displacement(vectors, 1.0, rig.n_vertices, limited=True)
+    moves = table1_weights(vectors, 1.0)
+    features = np.array([[moves[target] for target in feature_target_names()]])
+    weights = RigDriver(full).weights(np.zeros((1, len(FACE_CHANNELS))), features)[0]
+    return full.neutral + deform(full, {t: float(w) for t, w in zip(full.target_names, weights, strict=True) if w})
 
 
 def study_heads(ict_dir: Path | None) -> list[Rig]:

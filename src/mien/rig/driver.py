@@ -25,6 +25,7 @@ import numpy as np
 from mien.errors import InvalidValueError
 from mien.facs.catalogue import FACE_CHANNELS, POSE_CHANNELS
 from mien.rig.feature_points import feature_rooms, limit_moves
+from mien.rig.fp_correctives import Corrective, correctives, drive_correctives
 from mien.rig.mapping import AUMapping
 from mien.rig.model import Rig
 from mien.small_matmul import matmul_rows
@@ -64,8 +65,11 @@ class RigDriver:
         columns = [names.index(name) if name in names else -1 for name in feature_target_names()]
         self._feature_columns = np.array(columns, np.intp) if min(columns) >= 0 else None
         self._feature_rooms: np.ndarray | None = None
+        self._correctives: tuple[Corrective, ...] = ()
         if self._feature_columns is not None and rig is not None:
             self._feature_rooms = feature_rooms(rig)
+            self._correctives = tuple(c for c in correctives(rig) if c.target in names)
+        self._corrective_columns = np.array([names.index(c.target) for c in self._correctives], np.intp)
         self._frames32 = np.zeros((0, _N), np.float32)
 
     @property
@@ -92,7 +96,8 @@ class RigDriver:
         Each target is ``sum(intensity * weight_at_E / 5)`` over its AU channels, clipped to [0, 1] (see
         :mod:`mien.rig.mapping`). ``feature_weights`` (n, 54) metres, from ``"feature_points"`` characters, are
         written to the rig's ``fp_*`` targets (unclipped: they are signed distances), moves toward a barrier
-        softly limited to the room this rig has (:func:`mien.rig.feature_points.limit_moves`). ``out``: a C-contiguous
+        softly limited to the room this rig has (:func:`mien.rig.feature_points.limit_moves`), and drive the rig's
+        skin-detail correctives ``fpc_*`` (:func:`mien.rig.fp_correctives.drive_correctives`). ``out``: a C-contiguous
         (n, n_targets) float32 array to fill (nothing is allocated then, once the batch size is stable).
         """
         values = self._check_frames(frames)
@@ -121,6 +126,7 @@ class RigDriver:
             if self._feature_rooms is not None:
                 features = limit_moves(features, self._feature_rooms)
             out[:, self._feature_columns] = features
+            drive_correctives(features, self._correctives, self._corrective_columns, out)
         return out
 
     @property

@@ -9,7 +9,7 @@ without hand rigging.
 **The deformation rule.** Each feature's field is the smoothest surface function (biharmonic,
 :mod:`mien.rig.harmonic`) that is 1 on the feature's plateau (the anchor and the skin within ``plateau_m``), holds
 every other feature's anchor (the skin within :data:`CORE_M`) at that feature's share (0, or the csv ``rides``
-share: the lower lip rides the jaw, the mouth corners half, the upper lip points a corner's rise), each brow's strip
+share: the lower lip rides the jaw, the mouth corners half, the upper lip the nostrils' rise), each brow's strip
 of skin (``data/mpeg4_bands.csv``, within :data:`BAND_M` of its landmark chain) at the share of its two end features
 by its place along the brow (so a brow moves as a band, its middle never sagging toward the lid; the end features'
 regions reach from the whole strip) and every lid margin still (a lid feature moves its own margin with a

@@ -25,7 +25,8 @@ def load_head(name: str = "default", identity: str | None = None, feature_points
 
     Built-in identities: :data:`mien.rig.builtin_head.BUILTIN_IDENTITIES`; ICT identities:
     :func:`mien.rig.ict_facekit.ict_identity_presets`. With ``feature_points`` the Broekens feature-point
-    rig is compiled onto the head (54 extra targets ``fp_<Feature>_<axis>``).
+    rig is compiled onto the head (54 extra targets ``fp_<Feature>_<axis>``) with its skin-detail correctives
+    (``fpc_<shape>``, :mod:`mien.rig.fp_correctives`).
     """
     if name not in HEADS:
         raise UnknownNameError("head", name, HEADS)
@@ -46,6 +47,9 @@ def load_head(name: str = "default", identity: str | None = None, feature_points
         rig = builtin_head(identity or "default")
     if feature_points:
         from mien.rig.feature_points import FeaturePointRig
+        from mien.rig.fp_correctives import corrective_targets
 
-        rig = rig.with_targets(FeaturePointRig.build(rig).compile())
+        fp = FeaturePointRig.build(rig)
+        rig = rig.with_targets(fp.compile())
+        rig = rig.with_targets(corrective_targets(fp, rig))
     return rig

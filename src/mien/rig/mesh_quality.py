@@ -122,8 +122,19 @@ def max_target_strain(rig: Rig, names: tuple[str, ...] | None = None, region: st
     return max(scores, key=lambda item: item[1])
 
 
-FRAGILE_TARGETS = ("jawOpen", "mouthClose", "eyeBlinkLeft", "eyeBlinkRight")
-"""ARKit shapes whose own flips mark a head's fragile slivers (mouth corners, lid margins)."""
+FRAGILE_TARGETS = (
+    "jawOpen",
+    "mouthClose",
+    "eyeBlinkLeft",
+    "eyeBlinkRight",
+    "mouthSmileLeft",
+    "mouthSmileRight",
+    "cheekSquintLeft",
+    "cheekSquintRight",
+)
+"""ARKit shapes whose own flips mark a head's fragile slivers (mouth corners, lid margins): the opening and
+closing shapes, and the smile and cheek shapes the feature-point rig's correctives carry
+(:mod:`mien.rig.fp_correctives`; ICT's own smile folds the sliver at each inner lip corner)."""
 
 
 def fragile_faces(rig: Rig, names: tuple[str, ...] = FRAGILE_TARGETS, region: str | None = "skin") -> np.ndarray:

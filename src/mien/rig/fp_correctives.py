@@ -1,0 +1,187 @@
+"""Skin detail for the feature-point rig: the head's own shapes, less their anchor moves, ride the features.
+
+The feature-point fields (:mod:`mien.rig.feature_points`) are the smoothest skin through the 18 anchors that
+Broekens' Table 1 moves. Smooth skin cannot fold or bunch: a feature-point smile had no nasolabial fold, a
+lowered brow no bulge over the eye, and at intensity 1.2 the emotion classifier read both as neutral. Real skin
+gets that detail from the action itself, and a head's artist-made shape for the same action (its ARKit target,
+which the FACS basis drives) holds it. ``data/mpeg4_correctives.csv`` names, per action, the shape and the feature
+move that drives it (the lip corner's rise drives ``mouthSmile``, the inner brow's fall ``browDown``...).
+
+**The rule.** A corrective target is the shape ``S`` less the smooth fields through ``S``'s own moves at the 18
+anchors (``S - sum_f c_f field_f``, ``c`` solved so the result is 0 at every anchor, rides included), faded out over
+the lid features' regions (a lid moves only by its own feature; every other feature holds its margin, so a
+corrective moves a lid margin only toward the eye corners, where the lid's own field fades: at most 1.5 mm on
+the built-in and ICT heads). So the
+anchors still move exactly by Table 1, and only the skin between them changes. Its weight is the driving feature's
+move (after :func:`mien.rig.feature_points.limit_moves`) over the shape's own move at that feature's landmarks,
+clipped to 0..1: the artist's range, never past it, and nothing for a move the other way.
+
+>>> spec = corrective_specs()[0]
+>>> spec.shape, spec.feature, spec.axis
+('mouthSmile', 'LipCorner', '+y')
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cache
+
+import numpy as np
+
+from mien.errors import InvalidValueError, UnknownNameError
+from mien.rig.feature_points import AXES, FEATURE_NAMES, FeaturePointRig, _data_rows
+from mien.rig.model import MorphTarget, Rig
+
+__all__ = [
+    "CORRECTIVE_PREFIX",
+    "Corrective",
+    "CorrectiveSpec",
+    "corrective_specs",
+    "corrective_targets",
+    "correctives",
+    "drive_correctives",
+]
+
+CORRECTIVE_PREFIX = "fpc_"
+"""Prefix of the compiled corrective targets: ``fpc_mouthSmileLeft``..."""
+PLATEAU_SHARE = 0.999
+"""A feature target's vertices that move at least this share of the feature are its plateau."""
+MIN_SHAPE_MOVE_M = 1e-4
+"""A shape that moves its driving feature's landmarks less than this (metres, along the axis) drives nothing."""
+
+
+@dataclass(frozen=True)
+class CorrectiveSpec:
+    """One row of ``data/mpeg4_correctives.csv``."""
+
+    shape: str
+    """The head's shape, without its side (``mouthSmile``: ``mouthSmileLeft`` and ``mouthSmileRight``)."""
+    feature: str
+    """The driving feature, without its side (``LipCorner``), or a feature of its own (``Nostrils``)."""
+    axis: str
+    """Rig axis and sign of the driving move (``"+y"`` up, ``"-y"`` down)."""
+    why: str
+    """The skin detail the shape adds, with its source."""
+
+
+@cache
+def corrective_specs() -> tuple[CorrectiveSpec, ...]:
+    """The corrective rows of ``data/mpeg4_correctives.csv``, checked against the feature names."""
+    specs = []
+    for row in _data_rows("mpeg4_correctives.csv"):
+        spec = CorrectiveSpec(row["shape"].strip(), row["feature"].strip(), row["axis"].strip(), row["why"].strip())
+        if _feature_sides(spec.feature) is None:
+            raise UnknownNameError("feature driving a corrective", spec.feature, FEATURE_NAMES)
+        if len(spec.axis) != 2 or spec.axis[0] not in "+-" or spec.axis[1] not in AXES:
+            raise InvalidValueError(f"axis of the {spec.shape} corrective", spec.axis, "+x, -x, +y, -y, +z or -z")
+        specs.append(spec)
+    return tuple(specs)
+
+
+def _feature_sides(feature: str) -> tuple[str, ...] | None:
+    """``("",)`` for a feature of its own (``Nostrils``), ``("Left", "Right")`` for a sided one, None if unknown."""
+    if feature in FEATURE_NAMES:
+        return ("",)
+    if all(feature + side in FEATURE_NAMES for side in ("Left", "Right")):
+        return ("Left", "Right")
+    return None
+
+
+@dataclass(frozen=True)
+class Corrective:
+    """One compiled corrective on one rig: which target, which feature columns drive it, and how hard."""
+
+    target: str
+    """Corrective target name (``fpc_mouthSmileLeft``)."""
+    shape: str
+    """The head's shape it is made from (``mouthSmileLeft``)."""
+    sources: tuple[int, ...]
+    """Columns of the 54 feature weights whose mean move drives it (one; both sides for an unsided shape)."""
+    gain: float
+    """Weight per metre of that move: 1 over the shape's own move at the feature's landmarks (signed)."""
+
+
+def correctives(rig: Rig) -> tuple[Corrective, ...]:
+    """The correctives ``rig`` can carry: each spec whose shape the rig has and whose shape moves its feature.
+
+    ``rig`` has the compiled feature-point targets (``fp_*``); a feature's place is its target's plateau (the
+    skin it moves by 1), and the shape's own move there, along the spec's axis, sets the gain. A sided shape
+    (``mouthSmileLeft``/``Right``) follows its own side's feature (both sides follow a feature of its own, the
+    ``Nostrils``); a shape the head has only once (the built-in ``browInnerUp``) follows the mean of both sides.
+    A rig without the feature-point targets gets none.
+    """
+    by_name = {t.name: t for t in rig.targets}
+    out = []
+    for spec in corrective_specs():
+        axis = AXES.index(spec.axis[1])
+        sign = 1.0 if spec.axis[0] == "+" else -1.0
+        feature_sides = _feature_sides(spec.feature) or ()
+        drivers = {s: by_name.get(f"fp_{spec.feature}{s}_{spec.axis[1]}") for s in feature_sides}
+        if spec.shape + "Left" in by_name and spec.shape + "Right" in by_name:
+            pairs = [(spec.shape + s, (s,) if len(feature_sides) == 2 else feature_sides) for s in ("Left", "Right")]
+        else:
+            pairs = [(spec.shape, feature_sides)]
+        for shape, sides in pairs:
+            fields = [drivers[s] for s in sides]
+            if shape not in by_name or any(field is None for field in fields):
+                continue
+            plateau = np.concatenate([f.vertex_ids[f.deltas[:, axis] >= PLATEAU_SHARE] for f in fields if f])
+            if plateau.size == 0:
+                continue
+            dense = by_name[shape].dense(rig.n_vertices)
+            move = float(dense[plateau, axis].mean())
+            if sign * move < MIN_SHAPE_MOVE_M:
+                continue
+            sources = tuple(3 * FEATURE_NAMES.index(spec.feature + s) + axis for s in sides)
+            out.append(Corrective(CORRECTIVE_PREFIX + shape, shape, sources, 1.0 / move))
+    return tuple(out)
+
+
+def corrective_targets(fp: FeaturePointRig, rig: Rig) -> tuple[MorphTarget, ...]:
+    """The compiled corrective targets of :func:`correctives` for ``rig`` (with ``fp``'s compiled targets).
+
+    Each is its shape less the feature fields through the shape's anchor moves (0 at every anchor), faded out
+    over the lid features' regions; weight 1 is the whole residual (see the module docstring).
+    """
+    n = rig.n_vertices
+    fields = np.zeros((len(fp.names), 3, n))
+    for f, (ids, weights) in enumerate(zip(fp.region_ids, fp.region_weights, strict=True)):
+        fields[f][:, ids] = weights.T
+    anchors = np.asarray(fp.anchors, dtype=np.int64)
+    # per axis, field_f at anchor g: the identity plus the rides, so the solved mix is 0 at every anchor
+    at_anchors = fields[:, :, anchors].transpose(1, 2, 0)  # (axis, anchor g, feature f)
+    lid = np.zeros(n)
+    for f, name in enumerate(fp.names):
+        if name.startswith("Lid"):
+            lid = np.maximum(lid, np.abs(fields[f]).max(axis=0))
+    keep = 1.0 - np.clip(lid, 0.0, 1.0)
+    by_name = {t.name: t for t in rig.targets}
+    targets = []
+    for corrective in correctives(rig):
+        shape = by_name[corrective.shape].dense(n).astype(np.float64)
+        residual = shape.copy()
+        for a in range(3):
+            mix = np.linalg.solve(at_anchors[a], shape[anchors, a])
+            residual[:, a] -= mix @ fields[:, a]
+        residual *= keep[:, None]
+        targets.append(MorphTarget.from_dense(corrective.target, residual.astype(np.float32)))
+    return tuple(targets)
+
+
+def drive_correctives(
+    features: np.ndarray, drives: tuple[Corrective, ...], columns: np.ndarray, out: np.ndarray
+) -> np.ndarray:
+    """Write the corrective weights of (n, 54) feature moves (metres) into ``out[:, columns]``.
+
+    ``drives`` and ``columns`` (their target columns in ``out``) line up; each weight is the mean of its source
+    moves times its gain, clipped to 0..1.
+
+    >>> c = Corrective("fpc_mouthSmileLeft", "mouthSmileLeft", (20,), 100.0)
+    >>> moves = np.zeros((2, 54)); moves[:, 20] = [0.004, 0.02]
+    >>> drive_correctives(moves, (c,), np.array([0]), np.zeros((2, 1), np.float32)).ravel().tolist()
+    [0.4000000059604645, 1.0]
+    """
+    for corrective, column in zip(drives, columns, strict=True):
+        move = features[:, list(corrective.sources)].mean(axis=1)
+        out[:, column] = np.clip(move * corrective.gain, 0.0, 1.0)
+    return out

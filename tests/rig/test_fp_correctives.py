@@ -1,0 +1,106 @@
+"""Skin-detail correctives of the feature-point rig: anchors stay exact, lids stay still, weights follow the feature."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+from mien.affect.table1 import table1_vectors
+from mien.facs.catalogue import FACE_CHANNELS
+from mien.rig.builtin_head import builtin_head
+from mien.rig.driver import RigDriver
+from mien.rig.feature_points import FEATURE_NAMES, FeaturePointRig, feature_specs, feature_target_names, table1_weights
+from mien.rig.fp_correctives import (
+    CORRECTIVE_PREFIX,
+    corrective_specs,
+    corrective_targets,
+    correctives,
+    drive_correctives,
+)
+from mien.rig.geodesic import EdgeGraph
+from mien.rig.model import Rig
+
+
+@pytest.fixture(scope="module")
+def rigged() -> tuple[Rig, FeaturePointRig]:
+    rig = builtin_head()
+    fp = FeaturePointRig.build(rig)
+    full = rig.with_targets(fp.compile())
+    return full.with_targets(corrective_targets(fp, full)), fp
+
+
+def test_specs_name_shapes_and_features_the_heads_have() -> None:
+    rig = builtin_head()
+    specs = corrective_specs()
+    assert [s.shape for s in specs[:2]] == ["mouthSmile", "cheekSquint"]
+    for spec in specs:
+        assert spec.shape in rig.target_names or spec.shape + "Left" in rig.target_names
+        assert spec.feature in FEATURE_NAMES or spec.feature + "Left" in FEATURE_NAMES
+        assert spec.why.startswith("AU")
+
+
+def test_each_side_follows_its_own_feature(rigged: tuple[Rig, FeaturePointRig]) -> None:
+    rig, _ = rigged
+    found = {c.target: c for c in correctives(rig)}
+    smile = found["fpc_mouthSmileLeft"]
+    assert smile.sources == (3 * FEATURE_NAMES.index("LipCornerLeft") + 1,)  # its own corner's rise (rig y)
+    assert 1 / smile.gain == pytest.approx(
+        rig.target("mouthSmileLeft").dense(rig.n_vertices)[rig.landmarks[54], 1], rel=0.3
+    )
+    assert found["fpc_browDownLeft"].gain < 0  # driven by a fall
+    # the built-in head has one browInnerUp: both inner brows drive it; both nostril wings follow the Nostrils
+    assert found["fpc_browInnerUp"].sources == tuple(
+        3 * FEATURE_NAMES.index(f"BrowInner{s}") + 1 for s in ("Left", "Right")
+    )
+    assert (
+        found["fpc_noseSneerLeft"].sources
+        == found["fpc_noseSneerRight"].sources
+        == (3 * FEATURE_NAMES.index("Nostrils") + 1,)
+    )
+    assert correctives(builtin_head()) == ()  # no feature-point targets: nothing to drive
+
+
+def test_anchors_keep_their_table1_moves_and_lids_stay_still(rigged: tuple[Rig, FeaturePointRig]) -> None:
+    rig, fp = rigged
+    graph = EdgeGraph.from_mesh(np.asarray(rig.neutral, np.float64), rig.faces)
+    chains = [(a, b) for spec in feature_specs() for a, b in itertools.pairwise(spec.margin)]
+    margins = np.concatenate([graph.path(int(rig.landmarks[a]), int(rig.landmarks[b])) for a, b in chains])
+    for target in (t for t in rig.targets if t.name.startswith(CORRECTIVE_PREFIX)):
+        dense = target.dense(rig.n_vertices)
+        assert np.abs(dense[fp.anchors]).max() < 1e-6, target.name
+        # lid margins stay (but for 1.5 mm toward the eye corners, where a lid's own field fades)
+        assert np.abs(dense[margins]).max() < 2e-3, target.name
+        assert np.median(np.abs(dense[margins]).max(axis=1)) < 1e-5, target.name
+        assert np.abs(dense).max() > 5e-4, target.name  # it carries detail between the anchors
+
+
+def _weights(rig: Rig, emotion: str, intensity: float) -> dict[str, float]:
+    from mien.affect.emotions import emotion_vector
+
+    moves = table1_weights(np.tensordot(emotion_vector(emotion, intensity), table1_vectors(), axes=1))
+    features = np.array([[moves[name] for name in feature_target_names()]])
+    weights = RigDriver(rig).weights(np.zeros((1, len(FACE_CHANNELS))), features)[0]
+    return dict(zip(rig.target_names, weights.tolist(), strict=True))
+
+
+def test_the_driver_follows_the_feature_within_the_shapes_range(rigged: tuple[Rig, FeaturePointRig]) -> None:
+    rig, _ = rigged
+    joy, joy_strong, sad = _weights(rig, "joy", 0.5), _weights(rig, "joy", 2.4), _weights(rig, "sadness", 2.4)
+    smile = next(c for c in correctives(rig) if c.target == "fpc_mouthSmileLeft")
+    rise = joy["fp_LipCornerLeft_y"]  # after the barrier limit, as the driver shows it
+    assert joy["fpc_mouthSmileLeft"] == pytest.approx(min(rise * smile.gain, 1.0), rel=1e-5)
+    assert 0 < joy["fpc_mouthSmileLeft"] < joy_strong["fpc_mouthSmileLeft"] == 1.0  # never past the artist's shape
+    assert sad["fpc_mouthSmileLeft"] == 0.0  # corners down: no smile detail
+    assert sad["fpc_browInnerUp"] > 0 and sad["fpc_browDownLeft"] == 0.0
+    assert _weights(rig, "disgust", 1.2)["fpc_noseSneerLeft"] > 0
+
+
+def test_drive_correctives_clips_to_the_shape_range() -> None:
+    smile = next(c for c in correctives(builtin_head().with_targets(FeaturePointRig.build(builtin_head()).compile())))
+    moves = np.zeros((3, 54))
+    moves[:, smile.sources[0]] = [-0.01, 0.5 / smile.gain, 1.0]
+    out = drive_correctives(moves, (smile,), np.array([1]), np.zeros((3, 2), np.float32))
+    np.testing.assert_allclose(out[:, 1], [0.0, 0.5, 1.0], rtol=1e-6)
+    assert not out[:, 0].any()
