@@ -11,6 +11,7 @@ import pytest
 
 from mien.errors import InvalidValueError, UnknownNameError
 from mien.rig.builtin_head import builtin_head
+from mien.rig.driver import RigDriver
 from mien.rig.feature_points import (
     FEATURE_NAMES,
     FeaturePointRig,
@@ -274,21 +275,26 @@ EXPRESSIONS = (
 )
 
 
-def expression_vertices(rig: Rig, fp: FeaturePointRig, name: str, intensity: float) -> np.ndarray:
-    """(n, 3) deformed positions of emotion or blend ``name`` at ``intensity`` through Table 1, as the driver shows
-    it: moves toward a barrier limited, the skin-detail correctives driven."""
-    from mien.affect.emotions import emotion_vector
-    from mien.affect.table1 import table1_vectors
-    from mien.facs.catalogue import FACE_CHANNELS
-    from mien.rig.driver import RigDriver
+def driven(rig: Rig, fp: FeaturePointRig) -> tuple[Rig, RigDriver]:
+    """``rig`` with ``fp``'s targets and skin-detail correctives compiled on, and its driver."""
     from mien.rig.fp_correctives import corrective_targets
 
     full = rig.with_targets(fp.compile())
     full = full.with_targets(corrective_targets(fp, full))
+    return full, RigDriver(full)
+
+
+def expression_vertices(full: Rig, driver: RigDriver, name: str, intensity: float) -> np.ndarray:
+    """(n, 3) deformed positions of emotion or blend ``name`` at ``intensity`` through Table 1, as the driver shows
+    it (:func:`driven`): moves toward a barrier limited, the skin-detail correctives driven."""
+    from mien.affect.emotions import emotion_vector
+    from mien.affect.table1 import table1_vectors
+    from mien.facs.catalogue import FACE_CHANNELS
+
     vectors = np.tensordot(emotion_vector(name, intensity), table1_vectors(), axes=1)
     moves = table1_weights(vectors, 1.0)
     features = np.array([[moves[target] for target in feature_target_names()]])
-    weights = RigDriver(full).weights(np.zeros((1, len(FACE_CHANNELS))), features)[0]
+    weights = driver.weights(np.zeros((1, len(FACE_CHANNELS))), features)[0]
     return full.neutral + deform(full, {t: float(w) for t, w in zip(full.target_names, weights, strict=True) if w})
 
 
@@ -315,10 +321,10 @@ def test_edge_strain_within_the_heads_own_shapes(study_head: list[Rig]) -> None:
     from mien.rig.mesh_quality import max_edge_strain, max_target_strain
 
     for rig in study_head:
-        fp = FeaturePointRig.build(rig)
+        full, driver = driven(rig, FeaturePointRig.build(rig))
         _, bound = max_target_strain(rig)
         for name in EXPRESSIONS:
-            assert max_edge_strain(rig, expression_vertices(rig, fp, name, 2.4)) <= 2.0 * bound, (rig.name, name)
+            assert max_edge_strain(rig, expression_vertices(full, driver, name, 2.4)) <= 2.0 * bound, (rig.name, name)
 
 
 def test_no_triangle_flips(study_head: list[Rig]) -> None:
@@ -326,10 +332,10 @@ def test_no_triangle_flips(study_head: list[Rig]) -> None:
     from mien.rig.mesh_quality import flipped_triangles, fragile_faces, region_faces
 
     for rig in study_head:
-        fp = FeaturePointRig.build(rig)
+        full, driver = driven(rig, FeaturePointRig.build(rig))
         judged = np.setdiff1d(region_faces(rig), fragile_faces(rig))
         for name in EXPRESSIONS:
-            flips = flipped_triangles(rig, expression_vertices(rig, fp, name, 2.4), faces=judged)
+            flips = flipped_triangles(rig, expression_vertices(full, driver, name, 2.4), faces=judged)
             assert flips.size == 0, (rig.name, name)
 
 

@@ -14,6 +14,7 @@ from mien.rig.driver import RigDriver
 from mien.rig.feature_points import FEATURE_NAMES, FeaturePointRig, feature_specs, feature_target_names, table1_weights
 from mien.rig.fp_correctives import (
     CORRECTIVE_PREFIX,
+    corrective_matrix,
     corrective_specs,
     corrective_targets,
     correctives,
@@ -97,10 +98,14 @@ def test_the_driver_follows_the_feature_within_the_shapes_range(rigged: tuple[Ri
     assert _weights(rig, "disgust", 1.2)["fpc_noseSneerLeft"] > 0
 
 
-def test_drive_correctives_clips_to_the_shape_range() -> None:
-    smile = next(c for c in correctives(builtin_head().with_targets(FeaturePointRig.build(builtin_head()).compile())))
+def test_drive_correctives_clips_to_the_shape_range(rigged: tuple[Rig, FeaturePointRig]) -> None:
+    rig, _ = rigged
+    found = {c.target: c for c in correctives(rig)}
+    smile, inner = found["fpc_mouthSmileLeft"], found["fpc_browInnerUp"]
     moves = np.zeros((3, 54))
     moves[:, smile.sources[0]] = [-0.01, 0.5 / smile.gain, 1.0]
-    out = drive_correctives(moves, (smile,), np.array([1]), np.zeros((3, 2), np.float32))
+    moves[:, inner.sources[0]] = [0.0, 0.6 / inner.gain, 0.0]  # one inner brow up, the other still: half
+    out = drive_correctives(moves, corrective_matrix((smile, inner)), np.array([1, 2]), np.zeros((3, 3), np.float32))
     np.testing.assert_allclose(out[:, 1], [0.0, 0.5, 1.0], rtol=1e-6)
+    np.testing.assert_allclose(out[:, 2], [0.0, 0.3, 0.0], rtol=1e-6)
     assert not out[:, 0].any()

@@ -25,7 +25,7 @@ import numpy as np
 from mien.errors import InvalidValueError
 from mien.facs.catalogue import FACE_CHANNELS, POSE_CHANNELS
 from mien.rig.feature_points import feature_rooms, limit_moves
-from mien.rig.fp_correctives import Corrective, correctives, drive_correctives
+from mien.rig.fp_correctives import Corrective, corrective_matrix, correctives, drive_correctives
 from mien.rig.mapping import AUMapping
 from mien.rig.model import Rig
 from mien.small_matmul import matmul_rows
@@ -70,6 +70,7 @@ class RigDriver:
             self._feature_rooms = feature_rooms(rig)
             self._correctives = tuple(c for c in correctives(rig) if c.target in names)
         self._corrective_columns = np.array([names.index(c.target) for c in self._correctives], np.intp)
+        self._corrective_matrix = corrective_matrix(self._correctives)
         self._frames32 = np.zeros((0, _N), np.float32)
 
     @property
@@ -126,7 +127,7 @@ class RigDriver:
             if self._feature_rooms is not None:
                 features = limit_moves(features, self._feature_rooms)
             out[:, self._feature_columns] = features
-            drive_correctives(features, self._correctives, self._corrective_columns, out)
+            drive_correctives(features, self._corrective_matrix, self._corrective_columns, out)
         return out
 
     @property

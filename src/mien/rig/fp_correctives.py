@@ -11,10 +11,11 @@ move that drives it (the lip corner's rise drives ``mouthSmile``, the inner brow
 anchors (``S - sum_f c_f field_f``, ``c`` solved so the result is 0 at every anchor, rides included), faded out over
 the lid features' regions (a lid moves only by its own feature; every other feature holds its margin, so a
 corrective moves a lid margin only toward the eye corners, where the lid's own field fades: at most 1.5 mm on
-the built-in and ICT heads). So the
-anchors still move exactly by Table 1, and only the skin between them changes. Its weight is the driving feature's
-move (after :func:`mien.rig.feature_points.limit_moves`) over the shape's own move at that feature's landmarks,
-clipped to 0..1: the artist's range, never past it, and nothing for a move the other way.
+the built-in and ICT heads). So the anchors still move exactly by Table 1, and only the skin between them changes.
+Its weight is the driving feature's move (after :func:`mien.rig.feature_points.limit_moves`) over the shape's own
+move on that feature's plateau, clipped to 0..1: the artist's range, never past it, and nothing for a move the
+other way. A driver turns the correctives into one (54, k) matrix once (:func:`corrective_matrix`), so a tick is
+one product and a clip (:func:`drive_correctives`).
 
 >>> spec = corrective_specs()[0]
 >>> spec.shape, spec.feature, spec.axis
@@ -36,6 +37,7 @@ __all__ = [
     "CORRECTIVE_PREFIX",
     "Corrective",
     "CorrectiveSpec",
+    "corrective_matrix",
     "corrective_specs",
     "corrective_targets",
     "correctives",
@@ -168,20 +170,30 @@ def corrective_targets(fp: FeaturePointRig, rig: Rig) -> tuple[MorphTarget, ...]
     return tuple(targets)
 
 
-def drive_correctives(
-    features: np.ndarray, drives: tuple[Corrective, ...], columns: np.ndarray, out: np.ndarray
-) -> np.ndarray:
-    """Write the corrective weights of (n, 54) feature moves (metres) into ``out[:, columns]``.
+def corrective_matrix(drives: tuple[Corrective, ...]) -> np.ndarray:
+    """(54, k) float32: column ``j`` maps the 54 feature moves (metres) to corrective ``j``'s unclipped weight (the
+    mean of its source moves times its gain).
 
-    ``drives`` and ``columns`` (their target columns in ``out``) line up; each weight is the mean of its source
-    moves times its gain, clipped to 0..1.
+    >>> c = Corrective("fpc_browInnerUp", "browInnerUp", (43, 46), 100.0)
+    >>> m = corrective_matrix((c,)); m.shape, float(m[43, 0]), float(m[46, 0])
+    ((54, 1), 50.0, 50.0)
+    """
+    matrix = np.zeros((3 * len(FEATURE_NAMES), len(drives)), np.float32)
+    for j, corrective in enumerate(drives):
+        matrix[list(corrective.sources), j] = corrective.gain / len(corrective.sources)
+    return matrix
+
+
+def drive_correctives(features: np.ndarray, matrix: np.ndarray, columns: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """Write the corrective weights of (n, 54) feature moves (metres) into ``out[:, columns]``: ``features @ matrix``
+    (:func:`corrective_matrix`) clipped to 0..1.
 
     >>> c = Corrective("fpc_mouthSmileLeft", "mouthSmileLeft", (20,), 100.0)
     >>> moves = np.zeros((2, 54)); moves[:, 20] = [0.004, 0.02]
-    >>> drive_correctives(moves, (c,), np.array([0]), np.zeros((2, 1), np.float32)).ravel().tolist()
-    [0.4000000059604645, 1.0]
+    >>> out = drive_correctives(moves, corrective_matrix((c,)), np.array([0]), np.zeros((2, 1), np.float32))
+    >>> [round(v, 4) for v in out.ravel().tolist()]
+    [0.4, 1.0]
     """
-    for corrective, column in zip(drives, columns, strict=True):
-        move = features[:, list(corrective.sources)].mean(axis=1)
-        out[:, column] = np.clip(move * corrective.gain, 0.0, 1.0)
+    if columns.size:
+        out[:, columns] = np.clip(np.asarray(features, np.float32) @ matrix, 0.0, 1.0)
     return out
