@@ -148,10 +148,13 @@ def arkit_deltas(mesh: HeadMesh) -> dict[str, np.ndarray]:
     # --- jaw ---
     jaw = jaw_weights(mesh)
     hinge = np.array([0.0, float(shape.y(-0.02)), -0.075])
-    # The lower lip is soft: its share of the jaw's turn falls off toward the corners (an ellipse across the
-    # mouth), so the lips part as an oval, not a rectangle with a flat bottom.
+    # The lower lip is soft: its share of the jaw's turn falls off toward the corners, to nearly nothing at the
+    # corners themselves, so the lips part as a rounded bowl with closed corners (as a relaxed human jaw drop
+    # does), not a wide slot with square ends. A slot (share sqrt(1 - (x / 1.15 half-widths)^2), 0.49 at the
+    # corners) made the built-in head's surprise a wide dark rectangle that read as fear in 5 of 8 frontal
+    # renders; with this falloff 7 of 8 read surprise, fear and anger unchanged (docs/VALIDATION.md, eighth pass).
     lip_band = low * front * np.exp(-0.5 * ((yd - ym) / 0.010) ** 2)
-    ellipse = np.sqrt(np.clip(1.0 - (x / (mw * 1.15)) ** 2, 0.0, 1.0))
+    ellipse = np.clip(1.0 - (x / (mw * 1.05)) ** 2, 0.0, 1.0) ** 1.25
     jaw_lip = jaw * (1.0 - lip_band * (1.0 - ellipse))
     jaw_open = _rot_x(v, hinge, -JAW_OPEN_RAD * jaw_lip) - v
     # The condyle also slides forward as the jaw opens, so the chin goes mostly down, less back.
