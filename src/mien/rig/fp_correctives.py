@@ -14,8 +14,9 @@ corrective moves a lid margin only toward the eye corners, where the lid's own f
 the built-in and ICT heads). So the anchors still move exactly by Table 1, and only the skin between them changes.
 Its weight is the driving feature's move (after :func:`mien.rig.feature_points.limit_moves`) over the shape's own
 move on that feature's plateau, clipped to 0..1: the artist's range, never past it, and nothing for a move the
-other way. A driver turns the correctives into one (54, k) matrix once (:func:`corrective_matrix`), so a tick is
-one product and a clip (:func:`drive_correctives`).
+other way. ``S`` is the shape as its artist shipped it (a factor mien puts on a head's shape, ICT's browDown x 2
+for the FACS basis, :attr:`mien.rig.model.Rig.shape_gains`, is divided out). A driver turns the correctives into
+one (54, k) matrix once (:func:`corrective_matrix`), so a tick is one product and a clip (:func:`drive_correctives`).
 
 >>> spec = corrective_specs()[0]
 >>> spec.shape, spec.feature, spec.axis
@@ -130,7 +131,7 @@ def correctives(rig: Rig) -> tuple[Corrective, ...]:
             plateau = np.concatenate([f.vertex_ids[f.deltas[:, axis] >= PLATEAU_SHARE] for f in fields if f])
             if plateau.size == 0:
                 continue
-            dense = by_name[shape].dense(rig.n_vertices)
+            dense = by_name[shape].dense(rig.n_vertices) / rig.shape_gains.get(shape, 1.0)  # as shipped
             move = float(dense[plateau, axis].mean())
             if sign * move < MIN_SHAPE_MOVE_M:
                 continue
@@ -160,7 +161,7 @@ def corrective_targets(fp: FeaturePointRig, rig: Rig) -> tuple[MorphTarget, ...]
     by_name = {t.name: t for t in rig.targets}
     targets = []
     for corrective in correctives(rig):
-        shape = by_name[corrective.shape].dense(n).astype(np.float64)
+        shape = by_name[corrective.shape].dense(n).astype(np.float64) / rig.shape_gains.get(corrective.shape, 1.0)
         residual = shape.copy()
         for a in range(3):
             mix = np.linalg.solve(at_anchors[a], shape[anchors, a])

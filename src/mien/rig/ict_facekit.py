@@ -51,6 +51,7 @@ __all__ = [
     "ICT_N_IDENTITY",
     "ICT_N_VERTICES",
     "ICT_PARTS",
+    "ICT_TARGET_GAINS",
     "ict_cache_file",
     "ict_identity_presets",
     "ict_missing_files",
@@ -128,6 +129,16 @@ _EXTRA_SOURCES: dict[str, tuple[str, ...]] = {
     "pupilDilateLeft": ("PupilDilate_L",),
     "pupilDilateRight": ("PupilDilate_R",),
 }
+
+ICT_TARGET_GAINS: dict[str, float] = {"browDownLeft": 2.0, "browDownRight": 2.0}
+"""Factors on ICT's own shapes, applied when a rig is built (the cached arrays keep the shapes as shipped).
+
+``browDown``: ICT's shape lowers the brow 3.4 mm at weight 1 (mean of its 50 most-moved vertices; 6.5 mm at
+most, mostly inward and forward), where Broekens et al.'s Table 1 lowers the angry inner brow 12 mm and draws it
+13 mm in at intensity 1. MediaPipe reads ICT's browDown at weight 1 as 0.03 (the built-in head's as 0.41), so
+AU4 at E hardly showed: in `mien validate rig` its slope was 0.03, and at 45 degrees anger with or without AU4
+read the same. At 2.0 the brow comes 6.8 mm down and MediaPipe reads 0.15-0.18 (docs/VALIDATION.md, eighth
+pass)."""
 
 # First 16 of the identity coefficients in ICT-FaceKit's sample_identity_coeffs.json (MIT).
 _SAMPLE_IDENTITY = (
@@ -304,7 +315,11 @@ def _build(arrays: dict[str, np.ndarray], identity: np.ndarray | None, name: str
     offsets = arrays["target_offsets"]
     ids, deltas = arrays["target_ids"], arrays["target_deltas"]
     targets = tuple(
-        MorphTarget(str(t), ids[offsets[i] : offsets[i + 1]], deltas[offsets[i] : offsets[i + 1]])
+        MorphTarget(
+            str(t),
+            ids[offsets[i] : offsets[i + 1]],
+            deltas[offsets[i] : offsets[i + 1]] * ICT_TARGET_GAINS.get(str(t), 1.0),
+        )
         for i, t in enumerate(arrays["target_names"])
     )
     return Rig(
@@ -316,6 +331,7 @@ def _build(arrays: dict[str, np.ndarray], identity: np.ndarray | None, name: str
         regions=_regions(neutral, landmarks),
         eye_centers=eye_centers,
         neck_pivot=neck_pivot,
+        shape_gains=dict(ICT_TARGET_GAINS),
     )
 
 

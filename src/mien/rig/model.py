@@ -73,6 +73,10 @@ class Rig:
     """(2, 3) float32 centres of rotation of the left and right eyeballs, metres."""
     neck_pivot: np.ndarray = field(default_factory=lambda: np.array([0.0, -0.09, -0.04], np.float32))
     """(3,) float32 point the head rotates about, metres."""
+    shape_gains: dict[str, float] = field(default_factory=dict)
+    """Factors mien applied to the source's own shapes (target name -> factor, e.g. ICT's ``browDownLeft``: 2.0,
+    see :data:`mien.rig.ict_facekit.ICT_TARGET_GAINS`); the skin-detail correctives
+    (:mod:`mien.rig.fp_correctives`) use the shapes as their artist shipped them."""
 
     def __post_init__(self) -> None:
         neutral = np.ascontiguousarray(self.neutral, dtype=np.float32)
@@ -124,4 +128,5 @@ class Rig:
             vertex_colors=self.vertex_colors,
             eye_centers=self.eye_centers,
             neck_pivot=self.neck_pivot,
+            shape_gains=self.shape_gains,
         )
