@@ -109,3 +109,23 @@ def test_drive_correctives_clips_to_the_shape_range(rigged: tuple[Rig, FeaturePo
     np.testing.assert_allclose(out[:, 1], [0.0, 0.5, 1.0], rtol=1e-6)
     np.testing.assert_allclose(out[:, 2], [0.0, 0.3, 0.0], rtol=1e-6)
     assert not out[:, 0].any()
+
+
+def test_a_gain_on_a_heads_shape_is_divided_out(rigged: tuple[Rig, FeaturePointRig]) -> None:
+    """Correctives use the shape as shipped: a head whose browDown mien doubles (ICT) gets the same skin detail."""
+    import dataclasses
+
+    full, fp = rigged
+    base = builtin_head()
+    doubled = tuple(
+        dataclasses.replace(t, deltas=t.deltas * 2.0) if t.name.startswith("browDown") else t for t in base.targets
+    )
+    gained = dataclasses.replace(
+        base, targets=doubled, shape_gains={"browDownLeft": 2.0, "browDownRight": 2.0}
+    ).with_targets(fp.compile())
+    assert gained.shape_gains == {"browDownLeft": 2.0, "browDownRight": 2.0}  # with_targets keeps them
+    ours = {c.target: c for c in correctives(gained)}
+    for c in correctives(full):
+        assert ours[c.target].gain == pytest.approx(c.gain)
+    for a, b in zip(corrective_targets(fp, gained), corrective_targets(fp, full), strict=True):
+        np.testing.assert_allclose(a.dense(full.n_vertices), b.dense(full.n_vertices), atol=1e-7)

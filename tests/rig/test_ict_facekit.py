@@ -13,6 +13,7 @@ from mien.errors import InvalidValueError, MissingAssetError
 from mien.rig.arkit import ARKIT_NAMES
 from mien.rig.ict_facekit import (
     ICT_EXTRA_TARGETS,
+    ICT_TARGET_GAINS,
     ict_cache_file,
     ict_identity_presets,
     ict_missing_files,
@@ -130,6 +131,21 @@ def test_cached_load_equals_fresh_load(ict: Rig, ict_dir: Path) -> None:
             assert a.name == b.name
             np.testing.assert_array_equal(a.vertex_ids, b.vertex_ids)
             np.testing.assert_array_equal(a.deltas, b.deltas)
+
+
+def test_brow_lowerer_is_the_shipped_shape_times_its_gain(ict: Rig, ict_dir: Path) -> None:
+    assert ICT_TARGET_GAINS == {"browDownLeft": 2.0, "browDownRight": 2.0}
+    assert ict.shape_gains == ICT_TARGET_GAINS
+    model = ict_dir / "FaceXModel"
+    neutral = read_obj_vertices(model / "generic_neutral_mesh.obj")
+    for target, ict_file, gain in (("browDownLeft", "browDown_L", 2.0), ("browOuterUpLeft", "browOuterUp_L", 1.0)):
+        shipped = (read_obj_vertices(model / f"{ict_file}.obj") - neutral) * 0.01  # cm -> m
+        ours = ict.target(target).dense(ict.n_vertices)
+        np.testing.assert_allclose(ours, gain * shipped, atol=gain * 1.5e-5)  # sparse: moves under 0.01 mm dropped
+    # the brow now comes about 7 mm down at weight 1 (Table 1's angry inner brow: 12 mm; ICT as shipped: 3.4 mm)
+    down = ict.target("browDownLeft").dense(ict.n_vertices)
+    moved = np.argsort(np.linalg.norm(down, axis=1))[-50:]
+    assert -0.008 < down[moved, 1].mean() < -0.006
 
 
 def test_identity_presets_give_different_faces(ict: Rig, ict_dir: Path) -> None:
