@@ -68,16 +68,19 @@ def test_peak_face_keeps_prototype_proportions_at_the_strong_condition() -> None
     assert features is not None and np.abs(features).max() > 0
 
 
-def _need_render_and_detect() -> None:
+def _quick(
+    heads: list[tuple[str, str]], bases: tuple[str, ...], views: tuple[str, ...], expressions: tuple[str, ...]
+) -> RecognitionResult:
+    """The stimuli at intensities 1.2 and 2.4, rendered at 384 px and judged (skips without the render extras)."""
     for module in ("moderngl", "ai_edge_litert", "mediapipe"):
         pytest.importorskip(module)
+    stimuli = study_stimuli(heads, bases, views, (1.2, 2.4), expressions)
+    return run_recognition(stimuli, size=(384, 384), progress=False)
 
 
 @pytest.fixture(scope="module")
 def ict_frontal(ict_dir, landmarker_path, emotion_model_path) -> RecognitionResult:
-    _need_render_and_detect()
-    stimuli = study_stimuli([("ict", "a")], ("facs",), ("frontal-1m", "frontal-3m"), (1.2, 2.4), (*FIVE, "disgust"))
-    return run_recognition(stimuli, size=(384, 384), progress=False)
+    return _quick([("ict", "a")], ("facs",), ("frontal-1m", "frontal-3m"), (*FIVE, "disgust"))
 
 
 def test_quick_validation_five_emotions_frontal(ict_frontal: RecognitionResult) -> None:
@@ -91,9 +94,7 @@ def test_quick_validation_five_emotions_frontal(ict_frontal: RecognitionResult) 
 
 @pytest.fixture(scope="module")
 def builtin_feature_points(landmarker_path, emotion_model_path) -> RecognitionResult:
-    _need_render_and_detect()
-    stimuli = study_stimuli([("builtin", "default")], ("feature_points",), ("frontal-1m",), (1.2, 2.4), FIVE)
-    return run_recognition(stimuli, size=(384, 384), progress=False)
+    return _quick([("builtin", "default")], ("feature_points",), ("frontal-1m",), FIVE)
 
 
 def test_quick_validation_feature_point_basis(builtin_feature_points: RecognitionResult) -> None:
@@ -105,9 +106,7 @@ def test_quick_validation_feature_point_basis(builtin_feature_points: Recognitio
 
 @pytest.fixture(scope="module")
 def ict_feature_points(ict_dir, landmarker_path, emotion_model_path) -> RecognitionResult:
-    _need_render_and_detect()
-    stimuli = study_stimuli([("ict", "b")], ("feature_points",), ("frontal-1m",), (1.2, 2.4), FIVE)
-    return run_recognition(stimuli, size=(384, 384), progress=False)
+    return _quick([("ict", "b")], ("feature_points",), ("frontal-1m",), FIVE)
 
 
 def test_quick_validation_feature_point_basis_on_ict(ict_feature_points: RecognitionResult) -> None:
@@ -119,9 +118,7 @@ def test_quick_validation_feature_point_basis_on_ict(ict_feature_points: Recogni
 
 @pytest.fixture(scope="module")
 def ict_oblique(ict_dir, landmarker_path, emotion_model_path) -> RecognitionResult:
-    _need_render_and_detect()
-    stimuli = study_stimuli([("ict", "b")], ("facs",), ("oblique-1m",), (1.2, 2.4), FIVE)
-    return run_recognition(stimuli, size=(384, 384), progress=False)
+    return _quick([("ict", "b")], ("facs",), ("oblique-1m",), FIVE)
 
 
 def test_quick_validation_at_45_degrees_on_ict(ict_oblique: RecognitionResult) -> None:
@@ -134,10 +131,8 @@ def test_quick_validation_at_45_degrees_on_ict(ict_oblique: RecognitionResult) -
 
 @pytest.fixture(scope="module")
 def builtin_surprise(landmarker_path, emotion_model_path) -> RecognitionResult:
-    _need_render_and_detect()
     heads = [("builtin", "default"), ("builtin", "b")]
-    stimuli = study_stimuli(heads, ("facs",), ("frontal-1m", "frontal-3m"), (1.2, 2.4), ("surprise",))
-    return run_recognition(stimuli, size=(384, 384), progress=False)
+    return _quick(heads, ("facs",), ("frontal-1m", "frontal-3m"), ("surprise",))
 
 
 def test_quick_validation_builtin_surprise(builtin_surprise: RecognitionResult) -> None:
