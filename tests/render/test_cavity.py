@@ -31,3 +31,19 @@ def test_rig_without_a_mouth_interior_is_unchanged() -> None:
     head = builtin_head()
     bare = Rig("bare", head.neutral, head.faces, (), head.landmarks)
     np.testing.assert_array_equal(cavity_shade(bare), np.ones(head.n_vertices, np.float32))
+
+
+def test_every_output_gets_the_shade_through_the_rigs_colours() -> None:
+    """Renders, glTF exports and the viewer all take a rig's colours from ``rig_vertex_colors``: one appearance."""
+    from mien.exchange.glb import _appearance
+    from mien.render.appearance import rig_vertex_colors
+
+    rig = builtin_head()
+    shade = cavity_shade(rig)
+    colors = rig_vertex_colors(rig)
+    dark = np.flatnonzero(shade < 0.5)
+    assert dark.size > 100
+    unshaded = np.asarray(rig.vertex_colors, np.float32)
+    np.testing.assert_allclose(colors, unshaded * shade[:, None], rtol=1e-6)
+    exported, _, _ = _appearance(rig)
+    np.testing.assert_allclose(exported[dark], colors[dark], rtol=1e-6)  # the glTF's back teeth are dark too

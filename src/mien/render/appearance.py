@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from mien.render.cavity import cavity_shade
 from mien.render.face_paint import LIP_ALBEDO
 from mien.rig.model import Rig
 
@@ -91,7 +92,12 @@ def _forward_cosine(rig: Rig, ids: np.ndarray, side: int) -> np.ndarray:
 
 
 def rig_vertex_colors(rig: Rig) -> np.ndarray:
-    """(n_vertices, 3) float32 linear RGB albedo of ``rig``: its ``vertex_colors`` or colours by region."""
+    """(n_vertices, 3) float32 linear RGB albedo of ``rig``: its ``vertex_colors`` or colours by region, darkened
+    inside the mouth (:func:`~mien.render.cavity.cavity_shade`), as renders, glTF exports and the viewer show it."""
+    return _base_colors(rig) * cavity_shade(rig)[:, None]
+
+
+def _base_colors(rig: Rig) -> np.ndarray:
     if rig.vertex_colors is not None:
         return np.ascontiguousarray(rig.vertex_colors, dtype=np.float32)
     colors = np.empty((rig.n_vertices, 3), np.float32)

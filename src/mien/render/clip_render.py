@@ -19,7 +19,6 @@ from mien.errors import InvalidValueError, MienError
 from mien.progress import progress as progress_bar
 from mien.render.appearance import rig_vertex_colors, visible_faces
 from mien.render.camera import Camera
-from mien.render.cavity import cavity_shade
 from mien.render.face_paint import face_paint
 from mien.render.offscreen import DEFAULT_BACKGROUND, OffscreenRenderer
 from mien.render.video import write_mp4, write_png
@@ -100,8 +99,8 @@ def make_renderer(
     background: tuple[int, int, int] = DEFAULT_BACKGROUND,
     samples: int = 4,
 ) -> OffscreenRenderer:
-    """An :class:`OffscreenRenderer` for ``rig``: its visible faces, region colours darkened inside the mouth
-    (:func:`~mien.render.cavity.cavity_shade`) and face paint (brows, lash lines, lips:
+    """An :class:`OffscreenRenderer` for ``rig``: its visible faces, colours (darkened inside the mouth:
+    :func:`~mien.render.appearance.rig_vertex_colors`) and face paint (brows, lash lines, lips:
     :func:`~mien.render.face_paint.face_paint`), ``size`` (w, h) pixels."""
     width, height = _check_size(size)
     paint = face_paint(rig)
@@ -110,7 +109,7 @@ def make_renderer(
         width,
         height,
         camera,
-        vertex_colors=rig_vertex_colors(rig) * cavity_shade(rig)[:, None],
+        vertex_colors=rig_vertex_colors(rig),
         texture=None if paint is None else paint.texture,
         texcoords=None if paint is None else paint.texcoords,
         background=background,
