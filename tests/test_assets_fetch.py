@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import hashlib
 import http.server
-import socket
 import threading
 import zipfile
 from collections.abc import Iterator
@@ -15,6 +14,7 @@ import numpy as np
 import pytest
 
 from mien.cli import main
+from mien.study._postgres import free_port
 
 
 @pytest.fixture(scope="module")
@@ -94,9 +94,7 @@ def test_fetch_installs_where_mien_looks_and_the_head_loads(
 
 
 def _refused_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return int(probe.getsockname()[1])  # closed again: connecting is refused
+    return free_port()  # closed again: connecting is refused
 
 
 @pytest.mark.parametrize(

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from mien.study._postgres import free_port
 from mien.study.design import load_design
 from mien.study.runner import create_app
 from mien.study.stimuli import make_stimuli
@@ -190,9 +191,7 @@ def test_serve_refuses_clearly(study: tuple, tmp_path: Path, capsys: pytest.Capt
     from mien.cli import main
 
     design, _, folder = study
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        closed_port = probe.getsockname()[1]
+    closed_port = free_port()
     args = ["study", "serve", str(design.path), "--stimuli", str(folder), "--port", "0"]
     assert main([*args, "--db", f"postgresql://postgres@127.0.0.1:{closed_port}/x"]) == 2
     assert "locked or unreachable" in capsys.readouterr().err

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import os
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -17,6 +16,7 @@ from pathlib import Path
 import httpx
 import pytest
 
+from mien.study._postgres import free_port
 from mien.study.design import load_design
 from mien.study.stimuli import make_stimuli
 from mien.study.storage import Store, database_url
@@ -103,9 +103,7 @@ def db_url(request: pytest.FixtureRequest, tmp_path: Path) -> str:
 
 @pytest.fixture
 def server(design_path: Path, db_url: str) -> Iterator[Server]:
-    with socket.socket() as probe:  # a free port, kept across the restart
-        probe.bind(("127.0.0.1", 0))
-        port = probe.getsockname()[1]
+    port = free_port()  # kept across the restart
     running = Server(design_path, db_url, port)
     running.start()
     yield running

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 
+from mien.study._postgres import free_port
 from mien.study.export import read_answers_csv, write_answers_csv
 from mien.study.storage import StorageUnavailableError, Store, database_url
 
@@ -115,11 +116,7 @@ def test_locked_sqlite_retries_then_fails(tmp_path: Path) -> None:
 
 
 def test_unreachable_postgresql() -> None:
-    import socket
-
-    with socket.socket() as probe:  # a port nobody listens on
-        probe.bind(("127.0.0.1", 0))
-        port = probe.getsockname()[1]
+    port = free_port()  # a port nobody listens on
     with pytest.raises(StorageUnavailableError, match=str(port)):
         Store(f"postgresql+psycopg://postgres@127.0.0.1:{port}/postgres", retry_s=0.01, busy_timeout_s=1)
 

@@ -31,6 +31,7 @@ pytest.importorskip("fastapi", reason="the serve extra is not installed")
 Image = pytest.importorskip("PIL.Image", reason="pillow is not installed (render extra)")
 
 from mien.facs.catalogue import ACTION_UNITS, OPENFACS_AUS  # noqa: E402
+from mien.study._postgres import free_port  # noqa: E402
 from mien.viewer.vendor import three_dir  # noqa: E402
 
 VIEWPORT = {"width": 800, "height": 540}
@@ -439,9 +440,7 @@ def test_a_token_server_needs_the_token_in_the_address(chromium: object) -> None
 
 
 def test_the_page_reconnects_when_the_server_comes_back(chromium: object) -> None:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:  # a free port, to come back on
-        probe.bind(("127.0.0.1", 0))
-        port = str(probe.getsockname()[1])
+    port = str(free_port())  # a free port, to come back on
     with _serve("--http-port", port, "--no-idle") as server:
         page = Page(chromium, f"{server.url}/")
     try:
