@@ -102,6 +102,12 @@ JAW_TARGET = "jawOpen"
 """The head's own target whose off-surface moves (lower teeth, tongue) the Jaw feature carries."""
 MIDLINE_LANDMARKS = (27, 28, 29, 30)
 """iBUG nose-bridge landmarks whose mean x is the facial midline."""
+EYE_SLIDE_M = 0.008
+"""Skin within this distance of an eyeball's surface slides over it (:func:`eye_slide`)."""
+EYE_SLIDE_FULL = 0.5
+"""Share of :data:`EYE_SLIDE_M` next to the eyeball where the slide is whole."""
+EYE_SLIDE_FEATURES = ("LidUpper", "LidLower")
+"""Features (both sides) whose moves slide over the eyeballs: the lids (a brow's or a cheek's large move turned triangles over where its slide faded)."""
 
 
 @dataclass(frozen=True)
@@ -301,6 +307,40 @@ def design_moves(rooms: np.ndarray | None = None) -> np.ndarray:
     return np.asarray(np.linalg.norm(moves, axis=2).max(axis=0))
 
 
+def eye_slide(rig: Rig, surface: np.ndarray) -> np.ndarray:
+    """(n, 2, 3) float64: what each vertex moves besides a 1 m move along rig x (``[:, 0]``) or y (``[:, 1]``).
+
+    A lid margin lies on a sphere about its eyeball; moved straight down (Table 1's disgust closes the lids
+    6 mm at intensity 2.4) it went through the eyeball, which showed through the lid as blue patches. A vertex
+    on ``surface`` within :data:`EYE_SLIDE_M` of an eyeball (``rig.regions["eye_L"]``/``"eye_R"`` about
+    ``rig.eye_centers``) instead moves in the tangent plane of the sphere through it, so it never enters the
+    sphere: in front of the eye (``n``, its direction from the eye centre, facing forward) its x and y moves stay
+    exactly as asked and it moves forward by ``-(n_x dx + n_y dy) / n_z``; at the eye's sides, where the skin turns
+    away, the move loses its part along ``n``. Both are linear in the move, so the targets stay morph targets;
+    the slide fades out beyond :data:`EYE_SLIDE_FULL` of the band. Only the features that move skin onto an eyeball
+    slide (:data:`EYE_SLIDE_FEATURES`: lids and brows; a cheek rising 2 cm folded the skin where its slide faded).
+    """
+    out = np.zeros((rig.n_vertices, 2, 3))
+    neutral = np.asarray(rig.neutral, dtype=np.float64)
+    for side, centre in zip("LR", np.asarray(rig.eye_centers, dtype=np.float64), strict=True):
+        ball = rig.regions.get(f"eye_{side}")
+        if ball is None or len(ball) == 0:
+            continue
+        radius = float(np.median(np.linalg.norm(neutral[ball] - centre, axis=1)))
+        d = neutral - centre
+        r = np.linalg.norm(d, axis=1)
+        near = np.flatnonzero(surface & (r < radius + EYE_SLIDE_M) & (r > 0.5 * radius))
+        n = d[near] / r[near, None]
+        share = np.clip((radius + EYE_SLIDE_M - r[near]) / ((1.0 - EYE_SLIDE_FULL) * EYE_SLIDE_M), 0.0, 1.0)
+        nz = np.maximum(n[:, 2], 1e-3)
+        forward = np.zeros((len(near), 2, 3))
+        forward[:, :, 2] = -n[:, :2] / nz[:, None]  # e_a + this is tangent: (e_a - n_a / n_z e_z) . n = 0
+        across = -n[:, :2, None] * n[:, None, :]  # e_a - n_a n
+        front = np.clip((n[:, 2] - 0.3) / 0.3, 0.0, 1.0)[:, None, None]
+        out[near] = (front * forward + (1.0 - front) * across) * share[:, None, None]
+    return out
+
+
 def _jaw_carried(rig: Rig, chin: int, surface: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(ids, shares)`` of the vertices off the face surface (lower teeth, tongue) that the jaw carries.
 
@@ -357,6 +397,9 @@ class FeaturePointRig:
     """(18,) float64 geodesic radius of each region, metres."""
     rooms: np.ndarray
     """(2, 54) float64 move limits of the rig (:func:`feature_rooms`), metres."""
+    slide: np.ndarray
+    """(n_vertices, 2, 3) float64 extra move per metre of x and of y move of the skin over the eyeballs
+    (:func:`eye_slide`)."""
 
     @classmethod
     def build(cls, rig: Rig, radii: Mapping[str, float] | None = None) -> FeaturePointRig:
@@ -445,6 +488,7 @@ class FeaturePointRig:
             region_weights=tuple(weights_out),
             radii_m=radius,
             rooms=rooms,
+            slide=eye_slide(rig, surface),
         )
 
     def weights(self, feature: str, n_vertices: int, axis: str | None = None) -> np.ndarray:
@@ -460,13 +504,16 @@ class FeaturePointRig:
         return out
 
     def compile(self) -> tuple[MorphTarget, ...]:
-        """The 54 targets ``fp_<Feature>_<axis>``: weight 1 moves the region 1 m along that rig axis."""
+        """The 54 targets ``fp_<Feature>_<axis>``: weight 1 moves the region 1 m along that rig axis (the skin over
+        an eyeball also forward, :attr:`slide`)."""
         targets = []
         for name, ids, weights in zip(self.names, self.region_ids, self.region_weights, strict=True):
             for a, axis in enumerate(AXES):
                 moved = weights[:, a] != 0
                 deltas = np.zeros((int(moved.sum()), 3), np.float32)
                 deltas[:, a] = weights[moved, a]
+                if a < 2 and name.startswith(EYE_SLIDE_FEATURES):
+                    deltas += weights[moved, a, None] * self.slide[ids[moved], a]
                 targets.append(MorphTarget(f"fp_{name}_{axis}", ids[moved], deltas))
         return tuple(targets)
 
@@ -484,8 +531,12 @@ class FeaturePointRig:
             values = limit_moves(values, self.rooms)
         out = np.zeros((n_vertices, 3))
         for f in range(len(self.names)):
+            ids = self.region_ids[f]
             for a in range(3):
-                out[self.region_ids[f], a] += values[3 * f + a] * self.region_weights[f][:, a]
+                move = values[3 * f + a] * self.region_weights[f][:, a]
+                out[ids, a] += move
+                if a < 2 and self.names[f].startswith(EYE_SLIDE_FEATURES):
+                    out[ids] += move[:, None] * self.slide[ids, a]
         return out
 
 
