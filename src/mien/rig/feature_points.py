@@ -71,10 +71,12 @@ from mien.rig.model import MorphTarget, Rig
 __all__ = [
     "AXES",
     "FEATURE_NAMES",
+    "EYE_SLIDE_FEATURES",
     "BandSpec",
     "FeaturePointRig",
     "FeatureSpec",
     "band_specs",
+    "eye_slide",
     "feature_rooms",
     "feature_specs",
     "feature_target_names",
@@ -107,7 +109,8 @@ EYE_SLIDE_M = 0.008
 EYE_SLIDE_FULL = 0.5
 """Share of :data:`EYE_SLIDE_M` next to the eyeball where the slide is whole."""
 EYE_SLIDE_FEATURES = ("LidUpper", "LidLower")
-"""Features (both sides) whose moves slide over the eyeballs: the lids (a brow's or a cheek's large move turned triangles over where its slide faded)."""
+"""Features (both sides) whose moves slide over the eyeballs: the lids (a brow's or a cheek's large move turned
+triangles over where its slide faded)."""
 
 
 @dataclass(frozen=True)
