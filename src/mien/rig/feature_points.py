@@ -70,8 +70,8 @@ from mien.rig.model import MorphTarget, Rig
 
 __all__ = [
     "AXES",
-    "FEATURE_NAMES",
     "EYE_SLIDE_FEATURES",
+    "FEATURE_NAMES",
     "BandSpec",
     "FeaturePointRig",
     "FeatureSpec",
