@@ -320,8 +320,8 @@ def eye_slide(rig: Rig, surface: np.ndarray) -> np.ndarray:
     sphere: in front of the eye (``n``, its direction from the eye centre, facing forward) its x and y moves stay
     exactly as asked and it moves forward by ``-(n_x dx + n_y dy) / n_z``; at the eye's sides, where the skin turns
     away, the move loses its part along ``n``. Both are linear in the move, so the targets stay morph targets;
-    the slide fades out beyond :data:`EYE_SLIDE_FULL` of the band. Only the features that move skin onto an eyeball
-    slide (:data:`EYE_SLIDE_FEATURES`: lids and brows; a cheek rising 2 cm folded the skin where its slide faded).
+    the slide fades out beyond :data:`EYE_SLIDE_FULL` of the band. Only the lids' moves slide
+    (:data:`EYE_SLIDE_FEATURES`; a brow's or a cheek's large move turned triangles over where its slide faded).
     """
     out = np.zeros((rig.n_vertices, 2, 3))
     neutral = np.asarray(rig.neutral, dtype=np.float64)
@@ -510,15 +510,23 @@ class FeaturePointRig:
         """The 54 targets ``fp_<Feature>_<axis>``: weight 1 moves the region 1 m along that rig axis (the skin over
         an eyeball also forward, :attr:`slide`)."""
         targets = []
-        for name, ids, weights in zip(self.names, self.region_ids, self.region_weights, strict=True):
+        for f, name in enumerate(self.names):
             for a, axis in enumerate(AXES):
-                moved = weights[:, a] != 0
-                deltas = np.zeros((int(moved.sum()), 3), np.float32)
-                deltas[:, a] = weights[moved, a]
-                if a < 2 and name.startswith(EYE_SLIDE_FEATURES):
-                    deltas += weights[moved, a, None] * self.slide[ids[moved], a]
-                targets.append(MorphTarget(f"fp_{name}_{axis}", ids[moved], deltas))
+                ids, deltas = self._unit_move(f, a)
+                targets.append(MorphTarget(f"fp_{name}_{axis}", ids, deltas.astype(np.float32)))
         return tuple(targets)
+
+    def _unit_move(self, f: int, a: int) -> tuple[np.ndarray, np.ndarray]:
+        """``(ids, deltas)``: the vertices feature ``f`` moves and their (k, 3) float64 moves for 1 m along axis
+        ``a``: its field along that axis, plus the slide over the eyeballs for a lid's x or y move."""
+        field = self.region_weights[f][:, a]
+        moved = field != 0
+        ids = self.region_ids[f][moved]
+        deltas = np.zeros((len(ids), 3))
+        deltas[:, a] = field[moved]
+        if a < 2 and self.names[f].startswith(EYE_SLIDE_FEATURES):
+            deltas += field[moved, None] * self.slide[ids, a]
+        return ids, deltas
 
     def displacement(
         self, vectors_zxy: np.ndarray, intensity: float, n_vertices: int, limited: bool = False
@@ -534,12 +542,9 @@ class FeaturePointRig:
             values = limit_moves(values, self.rooms)
         out = np.zeros((n_vertices, 3))
         for f in range(len(self.names)):
-            ids = self.region_ids[f]
             for a in range(3):
-                move = values[3 * f + a] * self.region_weights[f][:, a]
-                out[ids, a] += move
-                if a < 2 and self.names[f].startswith(EYE_SLIDE_FEATURES):
-                    out[ids] += move[:, None] * self.slide[ids, a]
+                ids, deltas = self._unit_move(f, a)
+                out[ids] += values[3 * f + a] * deltas
         return out
 
 
