@@ -282,3 +282,38 @@ def test_neutral_face_does_not_read_surprised(identity: str, landmarker_path: Pa
             assert p["neutral"] > 0.12, (camera, p)  # the old wide-eyed, high-browed head read 0.00-0.03
     finally:
         detector.close()
+
+
+def _deepest_into_an_eye_mm(rig: Rig, expression: str, intensity: float) -> float:
+    """How much deeper (mm) than at rest any skin vertex lies inside an eyeball at ``expression``'s peak (FACS)."""
+    from mien.rig.deform import Deformer
+    from mien.rig.mapping import AUMapping
+    from mien.validate.recognition import peak_face
+
+    frame, _ = peak_face(expression, intensity, "facs")
+    weights = AUMapping.default().weights_for(rig).to_weights(frame)
+    moved = Deformer(rig, backend="numpy").deform(np.asarray(weights, np.float32)).astype(np.float64)
+    neutral = np.asarray(rig.neutral, np.float64)
+    skin = np.asarray(rig.regions["skin"], np.int64)
+    deepest = 0.0
+    for side, centre in zip("LR", np.asarray(rig.eye_centers, np.float64), strict=True):
+        ball = np.asarray(rig.regions[f"eye_{side}"], np.int64)
+        radius = float(np.median(np.linalg.norm(neutral[ball] - centre, axis=1)))
+        before = np.maximum(radius - np.linalg.norm(neutral[skin] - centre, axis=1), 0.0)
+        after = radius - np.linalg.norm(moved[skin] - centre, axis=1)
+        deepest = max(deepest, float((after - before).max()))
+    return 1000.0 * deepest
+
+
+@pytest.mark.parametrize("identity", ["default", "b"])
+def test_lowered_brow_folds_over_the_lid_not_into_the_eye(identity: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Anger and evil at 2.4 lower the brows (AU4) onto the upper lid: the skin between stays out of the eyeball
+    (within 0.75 mm; the 1 mm lid sphere's flat fold let it 1.8 mm in, showing a grey cap above the lid)."""
+    import mien.rig.head_geometry as geometry
+
+    shape = BUILTIN_IDENTITIES[identity]
+    for expression in ("anger", "evil"):
+        assert _deepest_into_an_eye_mm(builtin_head(shape), expression, 2.4) < 0.75, expression
+    monkeypatch.setattr(geometry, "LID_FOLD_M", 0.0)
+    flat = builtin_head(dataclasses.replace(shape, name=f"{identity}-flat-fold"))
+    assert _deepest_into_an_eye_mm(flat, "anger", 2.4) > 1.5

@@ -26,6 +26,9 @@ __all__ = [
     "EARS",
     "EYE_L",
     "EYE_R",
+    "LID_FOLD_M",
+    "LID_FOLD_OUTER",
+    "LID_FOLD_RISE_M",
     "PART_NAMES",
     "SKIN",
     "TEETH_LOWER",
@@ -85,6 +88,19 @@ _LOWER_TEETH = np.array(
         [0.0071, 0.0085, 0.0065, 0.0009],
     ]
 )
+LID_FOLD_M = 0.0015
+"""How much further off the eyeball than the lid (:attr:`HeadShape.lid_radius_m`) the skin above the upper lid's
+margin stands, metres, reached :data:`LID_FOLD_RISE_M` above the margin and fading out toward the outer corner
+(:data:`LID_FOLD_OUTER`): the fold of skin over the orbital fat between the lid and the brow. With none (mien
+0.1..0.18) a lowered brow pushed that skin into the eyeball, which showed through as a grey cap above the lid (the
+built-in head's anger at 2.4: 32 skin vertices up to 1.8 mm deep; with it, 18 up to 0.5 mm; docs/VALIDATION.md,
+tenth pass)."""
+LID_FOLD_RISE_M = 0.003
+"""Height above the upper lid's margin over which :data:`LID_FOLD_M` builds up (a smoothstep), metres."""
+LID_FOLD_OUTER = (0.6, 1.2)
+"""Where the fold fades out toward the eye's outer corner, in eye half-widths from its centre: the brow lowerer pulls
+the brow down medially, and a fold over the outer lid droops it, a sign of sadness (with it there, the classifier
+read the built-in b head's smile at 1.2 as sad at both distances)."""
 BROW_Y_D = 0.0150
 """Design height of the middle of the brow at its inner end, metres above the eye centres."""
 Z_CENTRE = -0.07
@@ -416,8 +432,9 @@ def build_head_mesh(shape: HeadShape) -> HeadMesh:
     n += len(mouth_cols)
 
     all_v = np.vstack(verts)
-    # Eyelids: sink a socket round each eye and lay the skin on the lid sphere (1 mm clear of the eyeball)
-    # wherever that sphere stands in front of it; a smooth maximum leaves a soft lid crease.
+    # Eyelids: sink a socket round each eye and lay the skin on the lid sphere (1 mm clear of the eyeball; the fold
+    # above the upper lid LID_FOLD_M further) wherever that sphere stands in front of it; a smooth maximum leaves a
+    # soft lid crease.
     rc = shape.lid_radius_m
     for c in centers:
         d = all_v - c
@@ -428,7 +445,11 @@ def build_head_mesh(shape: HeadShape) -> HeadMesh:
         corner = (d[:, 0] / 1.12) ** 2 / np.maximum(d_ell**2, 1e-12)
         socket = (0.003 + 0.006 * corner) * (1.0 - smoothstep(0.008, 0.018, d_ell)) * front_v
         z_face = all_v[:, 2] - socket
-        r2 = rc**2 - d[:, 0] ** 2 - d[:, 1] ** 2
+        margin = lid_heights(np.zeros(1), shape)[0][0]
+        outward = d[:, 0] * np.sign(c[0]) / shape.eye_half_width_m  # toward the outer corner, in half-widths
+        fold = smoothstep(margin, margin + LID_FOLD_RISE_M, d[:, 1]) * (1.0 - smoothstep(*LID_FOLD_OUTER, outward))
+        r_fold = rc + LID_FOLD_M * fold
+        r2 = r_fold**2 - d[:, 0] ** 2 - d[:, 1] ** 2
         z_sph = np.where((r2 > 0) & front_v, c[2] + np.sqrt(np.clip(r2, 0.0, None)), -1.0)
         k = 0.0012
         all_v[:, 2] = 0.5 * (z_face + z_sph + np.sqrt((z_face - z_sph) ** 2 + k**2))
