@@ -436,6 +436,7 @@ def build_head_mesh(shape: HeadShape) -> HeadMesh:
     # above the upper lid LID_FOLD_M further) wherever that sphere stands in front of it; a smooth maximum leaves a
     # soft lid crease.
     rc = shape.lid_radius_m
+    margin = lid_heights(np.zeros(1), shape)[0][0]  # the upper lid's margin above the eye centre
     for c in centers:
         d = all_v - c
         d_ell = np.sqrt((d[:, 0] / 1.12) ** 2 + d[:, 1] ** 2)
@@ -445,7 +446,6 @@ def build_head_mesh(shape: HeadShape) -> HeadMesh:
         corner = (d[:, 0] / 1.12) ** 2 / np.maximum(d_ell**2, 1e-12)
         socket = (0.003 + 0.006 * corner) * (1.0 - smoothstep(0.008, 0.018, d_ell)) * front_v
         z_face = all_v[:, 2] - socket
-        margin = lid_heights(np.zeros(1), shape)[0][0]
         outward = d[:, 0] * np.sign(c[0]) / shape.eye_half_width_m  # toward the outer corner, in half-widths
         fold = smoothstep(margin, margin + LID_FOLD_RISE_M, d[:, 1]) * (1.0 - smoothstep(*LID_FOLD_OUTER, outward))
         r_fold = rc + LID_FOLD_M * fold
