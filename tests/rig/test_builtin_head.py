@@ -252,7 +252,7 @@ def test_open_jaw_shows_rows_of_upper_and_lower_teeth(identity: str) -> None:
     # rows, not slivers at the corners: the upper row spans most of the mouth; the lower lip, which follows
     # the jaw less toward the corners (a bowl-shaped opening), covers the lower row's side teeth, as in a
     # relaxed human jaw drop, so the lower row shows incisors and canines
-    for teeth, count, span in ((upper, 80, 0.6), (lower, 50, 0.4)):
+    for teeth, count, span in ((upper, 80, 0.6), (lower, 50, 0.38)):
         assert len(teeth) > count
         assert np.ptp(teeth[:, 1]) > span * mouth_width
         middle = np.abs(teeth[:, 1] - lips[:, 1].mean()) < 0.15 * mouth_width
@@ -264,6 +264,41 @@ def test_open_jaw_shows_rows_of_upper_and_lower_teeth(identity: str) -> None:
         weights[rig.target_names.index(name)] = 1.0
     parted = _render(rig, weights, "frontal-1m")
     assert len(_pixels(parted, 1)) > 60
+
+
+@pytest.mark.parametrize("identity", ["default", "b"])
+def test_open_jaw_at_45_degrees_shows_the_far_side_teeth(identity: str) -> None:
+    # the dental arch curves back no further than the lips do, so the far half of an open mouth shows its teeth
+    # rather than a dark void between the far lip corner and the incisors (0.30 of the mouth's width on the b head
+    # with the old 22 mm arch)
+    from mien.render.camera import FACE_CENTRE_M, Camera
+    from mien.render.clip_render import render_still
+
+    rig = _marked(builtin_head(identity), {"lips": (1, 0, 0), "teeth_upper": (0, 1, 0)})
+    weights = np.zeros(len(rig.targets), np.float32)
+    weights[rig.target_names.index("jawOpen")] = 1.0
+    camera = Camera(yaw_deg=45.0, distance_m=1.0, target=FACE_CENTRE_M)
+    rgb = render_still(rig, weights, camera, (512, 512)).astype(np.int32)
+    lips, upper = _pixels(rgb, 0), _pixels(rgb, 1)
+    assert np.ptp(upper[:, 1]) > 0.33 * np.ptp(lips[:, 1])
+
+
+def test_hairline_is_drawn_without_steps() -> None:
+    # per-vertex colour is interpolated across each triangle, so a triangle that spans the whole hair/skin ramp
+    # draws a step; toward the nape the hairline drops steeply across sparse columns and its ramp widens there
+    # (99th percentile of the span per triangle 0.67 with the narrow ramp)
+    from mien.rig.head_geometry import SKIN, Z_CENTRE, skin_masks
+
+    for identity in BUILTIN_IDENTITIES:
+        mesh = builtin_head_mesh(identity)
+        skin = mesh.part == SKIN
+        hair = np.zeros(len(mesh.vertices))
+        hair[skin] = skin_masks(mesh.vertices[skin], mesh.material[skin], mesh.shape)["hair"]
+        faces = mesh.faces[np.all(skin[mesh.faces], axis=1)]
+        centre = mesh.vertices[faces].mean(axis=1)
+        facing = (centre[:, 2] - Z_CENTRE) / np.hypot(centre[:, 0], centre[:, 2] - Z_CENTRE)
+        span = np.ptp(hair[faces], axis=1)[facing < -0.3]
+        assert np.percentile(span, 99) < 0.6, identity
 
 
 @pytest.mark.parametrize("identity", ["default", "b"])

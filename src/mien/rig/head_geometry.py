@@ -59,7 +59,7 @@ TEETH_DEPTH_M = 0.0075
 """Depth of the front teeth's labial faces behind the lips' front at the midline, metres."""
 TEETH_SHOW_M = 0.0032
 """How far the upper central incisors' edges reach below the lip line, metres (seen when the lips part)."""
-ARCH_DEPTH_M = 0.022
+ARCH_DEPTH_M = 0.016
 """How far the dental arch curves back from the midline to ``x`` = the mouth's half-width, metres."""
 CAVITY_FLARE = (0.3, 0.3, 0.0)
 """How much wider and taller (x, y; 0.3 = 30 %) the mouth cavity's back is than its front: a pear lying behind the
@@ -740,7 +740,8 @@ def skin_masks(v: np.ndarray, m: np.ndarray, shape: HeadShape) -> dict[str, np.n
     # painted hair: above a hairline that drops from the forehead to the nape
     c = (v[:, 2] - Z_CENTRE) / np.maximum(np.hypot(v[:, 0], v[:, 2] - Z_CENTRE), 1e-9)
     line = np.where(c > 0, 0.024 + 0.044 * np.abs(c) ** 0.7, 0.024 + 0.085 * c)
-    hair = smoothstep(-0.006, 0.006, v[:, 1] - line)
+    soft = 0.006 + 0.006 * np.clip(-c, 0.0, 1.0)  # wider where the line drops steeply toward the nape
+    hair = smoothstep(-soft, soft, v[:, 1] - line)
     return {"lips": lips, "brows": brows, "hair": hair}
 
 
