@@ -251,7 +251,7 @@ def test_open_jaw_shows_rows_of_upper_and_lower_teeth(identity: str) -> None:
     mouth_width = np.ptp(lips[:, 1])
     # rows, not slivers at the corners: the upper row spans most of the mouth; the lower lip, which follows
     # the jaw less toward the corners (a bowl-shaped opening), covers the lower row's side teeth, as in a
-    # relaxed human jaw drop, so the lower row shows incisors and canines
+    # relaxed human jaw drop, so the lower row shows incisors and canines (0.39 of the width with the 16 mm arch)
     for teeth, count, span in ((upper, 80, 0.6), (lower, 50, 0.38)):
         assert len(teeth) > count
         assert np.ptp(teeth[:, 1]) > span * mouth_width
@@ -268,9 +268,9 @@ def test_open_jaw_shows_rows_of_upper_and_lower_teeth(identity: str) -> None:
 
 @pytest.mark.parametrize("identity", ["default", "b"])
 def test_open_jaw_at_45_degrees_shows_the_far_side_teeth(identity: str) -> None:
-    # the dental arch curves back no further than the lips do, so the far half of an open mouth shows its teeth
-    # rather than a dark void between the far lip corner and the incisors (0.30 of the mouth's width on the b head
-    # with the old 22 mm arch)
+    # the dental arch curves back 16 mm to the mouth's corners (it was 22 mm, against the lips' 7 mm), so the far
+    # half of an open mouth shows more of its teeth and less of a dark void between the far lip corner and the
+    # incisors (the upper row spanned 0.30 of the mouth's width on the b head with the 22 mm arch)
     from mien.render.camera import FACE_CENTRE_M, Camera
     from mien.render.clip_render import render_still
 

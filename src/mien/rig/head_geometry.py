@@ -60,7 +60,9 @@ TEETH_DEPTH_M = 0.0075
 TEETH_SHOW_M = 0.0032
 """How far the upper central incisors' edges reach below the lip line, metres (seen when the lips part)."""
 ARCH_DEPTH_M = 0.016
-"""How far the dental arch curves back from the midline to ``x`` = the mouth's half-width, metres."""
+"""How far the dental arch curves back from the midline to ``x`` = the mouth's half-width, metres (shallower than a
+real arch: the lips' slit curves back only about 7 mm, and a deeper arch leaves a dark void behind the far lip corner
+of an open mouth seen at 45 degrees)."""
 CAVITY_FLARE = (0.3, 0.3, 0.0)
 """How much wider and taller (x, y; 0.3 = 30 %) the mouth cavity's back is than its front: a pear lying behind the
 lips. What is seen through the slit is the back, wide and tall enough for a smile's stretched, raised corners
