@@ -99,7 +99,7 @@ async def run_participants(url: str, n: int) -> tuple[dict[str, list[float]], in
 def start_server(design: Path, db: str) -> tuple[subprocess.Popen[bytes], str]:
     import httpx
 
-    from mien.study._postgres import free_port
+    from mien.ports import free_port
 
     port = free_port()
     command = [sys.executable, "-m", "mien.cli", "study", "serve", str(design), "--db", db, "--port", str(port)]

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from mien.cli import main
-from mien.study._postgres import free_port
+from mien.ports import free_port
 
 
 @pytest.fixture(scope="module")

@@ -126,7 +126,7 @@ def test_anchor_moves_exactly_by_the_vector(head: tuple[Rig, FeaturePointRig]) -
             d = deform(rig, table1_weights(alone, 1.2))
             z, x, y = vectors[f]
             move = 1.2 * np.array([x, -y, z])
-            if name.startswith(EYE_SLIDE_FEATURES):  # lids and brows slide over the eyeball
+            if name.startswith(EYE_SLIDE_FEATURES):  # the lids slide over the eyeball
                 move += move[0] * fp.slide[fp.anchors[f], 0] + move[1] * fp.slide[fp.anchors[f], 1]
             np.testing.assert_allclose(d[fp.anchors[f]], move, atol=1e-6, err_msg=f"{emotion} {name}")
         d = deform(rig, table1_weights(vectors, 1.2))  # the fields add up

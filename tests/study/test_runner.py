@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from mien.study._postgres import free_port
+from mien.ports import free_port
 from mien.study.design import load_design
 from mien.study.runner import create_app
 from mien.study.stimuli import make_stimuli

@@ -16,7 +16,7 @@ from pathlib import Path
 import httpx
 import pytest
 
-from mien.study._postgres import free_port
+from mien.ports import free_port
 from mien.study.design import load_design
 from mien.study.stimuli import make_stimuli
 from mien.study.storage import Store, database_url

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from mien.study._postgres import free_port
+from mien.ports import free_port
 from mien.study.export import read_answers_csv, write_answers_csv
 from mien.study.storage import StorageUnavailableError, Store, database_url
 

@@ -31,7 +31,7 @@ pytest.importorskip("fastapi", reason="the serve extra is not installed")
 Image = pytest.importorskip("PIL.Image", reason="pillow is not installed (render extra)")
 
 from mien.facs.catalogue import ACTION_UNITS, OPENFACS_AUS  # noqa: E402
-from mien.study._postgres import free_port  # noqa: E402
+from mien.ports import free_port  # noqa: E402
 from mien.viewer.vendor import three_dir  # noqa: E402
 
 VIEWPORT = {"width": 800, "height": 540}

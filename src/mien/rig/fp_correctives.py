@@ -131,13 +131,18 @@ def correctives(rig: Rig) -> tuple[Corrective, ...]:
             plateau = np.concatenate([f.vertex_ids[f.deltas[:, axis] >= PLATEAU_SHARE] for f in fields if f])
             if plateau.size == 0:
                 continue
-            dense = by_name[shape].dense(rig.n_vertices) / rig.shape_gains.get(shape, 1.0)  # as shipped
-            move = float(dense[plateau, axis].mean())
+            move = float(_as_shipped(rig, by_name[shape])[plateau, axis].mean())
             if sign * move < MIN_SHAPE_MOVE_M:
                 continue
             sources = tuple(3 * FEATURE_NAMES.index(spec.feature + s) + axis for s in sides)
             out.append(Corrective(CORRECTIVE_PREFIX + shape, shape, sources, 1.0 / move))
     return tuple(out)
+
+
+def _as_shipped(rig: Rig, shape: MorphTarget) -> np.ndarray:
+    """(n_vertices, 3) float64 dense deltas of ``rig``'s ``shape`` as its artist shipped it (mien's factor divided
+    out, :attr:`mien.rig.model.Rig.shape_gains`)."""
+    return shape.dense(rig.n_vertices).astype(np.float64) / rig.shape_gains.get(shape.name, 1.0)
 
 
 def corrective_targets(fp: FeaturePointRig, rig: Rig) -> tuple[MorphTarget, ...]:
@@ -161,7 +166,7 @@ def corrective_targets(fp: FeaturePointRig, rig: Rig) -> tuple[MorphTarget, ...]
     by_name = {t.name: t for t in rig.targets}
     targets = []
     for corrective in correctives(rig):
-        shape = by_name[corrective.shape].dense(n).astype(np.float64) / rig.shape_gains.get(corrective.shape, 1.0)
+        shape = _as_shipped(rig, by_name[corrective.shape])
         residual = shape.copy()
         for a in range(3):
             mix = np.linalg.solve(at_anchors[a], shape[anchors, a])
