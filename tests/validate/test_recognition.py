@@ -149,6 +149,11 @@ def test_disgust_shows_its_facs_signs(ict_frontal: RecognitionResult) -> None:
         # upper-lip raiser seen by the detector, and the nose-to-lip distance shortened on the mesh
         assert score.aus["AU10"] > max(s.aus["AU10"] for s in neutral) + 0.5
         assert score.nose_lip_mm < lip_neutral - 1.0
+        # the landmark estimate of the upper-lip raise agrees (on ICT its trace of AU9 is lost in AU10's cross-talk)
+        assert score.landmark_aus["AU10"] > 2.0
+    assert all(s.landmark_aus == {"AU9": 0.0, "AU10": 0.0} for s in neutral)
+    for score in ict_frontal.subset(expression="anger"):
+        assert score.landmark_aus["AU9"] < 0.6
 
 
 def test_facs_reading_matches_prototypes() -> None:

@@ -141,6 +141,9 @@ class StimulusScore:
     """Detected AU intensities (``"AU9"`` -> 0..5) when the detector gives blendshapes."""
     nose_lip_mm: float = float("nan")
     """Nose-base to upper-lip-top distance on the rendered mesh, millimetres (iBUG 33 -> 51)."""
+    landmark_aus: dict[str, float] = field(default_factory=dict)
+    """AU9 and AU10 (0..5) measured on the rendered mesh's landmarks (:mod:`mien.validate.landmark_aus`); the FACS
+    reading takes AU9 from here, as the detector cannot see it."""
     facs_top: str | None = None
     """The FACS reading: the emotion whose EMFACS prototype best matches the AUs detected above the same
     setup's neutral (see the module docstring); None without blendshapes, for neutral, or when nothing moved."""
@@ -257,6 +260,11 @@ class RecognitionResult:
         scores = self.subset(**conditions)
         return float(np.mean([s.top == label for s in scores])) if scores else float("nan")
 
+    def landmark_au(self, au: str, **conditions: Any) -> float:
+        """Mean landmark estimate of ``au`` (``"AU9"``, ``"AU10"``; 0..5) over matching stimuli; nan when none."""
+        values = [s.landmark_aus[au] for s in self.subset(**conditions) if au in s.landmark_aus]
+        return float(np.mean(values)) if values else float("nan")
+
     def facs_rate(self, read_as: str | None = None, **conditions: Any) -> float:
         """Share of matching stimuli whose FACS reading is ``read_as`` (default: each one's own expression; a
         blend counts when the reading is one of its components); nan when none has a reading."""
@@ -301,6 +309,7 @@ class RecognitionResult:
                     "face_found": s.face_found,
                     "aus": {k: round(v, 3) for k, v in s.aus.items()},
                     "nose_lip_mm": None if not np.isfinite(s.nose_lip_mm) else round(s.nose_lip_mm, 3),
+                    "landmark_aus": {k: round(v, 3) for k, v in s.landmark_aus.items()},
                     "facs_top": s.facs_top,
                 }
                 for s in self.scores
@@ -354,8 +363,11 @@ def _with_facs_readings(scores: Sequence[StimulusScore], aus: Sequence[int]) -> 
     """``scores`` with :attr:`StimulusScore.facs_top` set against each setup's neutral (zeros where none)."""
     from dataclasses import replace
 
+    from mien.validate.landmark_aus import merged_aus
+
     def vector(score: StimulusScore) -> np.ndarray:
-        return np.array([score.aus.get(f"AU{code}", 0.0) for code in aus])
+        seen = merged_aus(score.aus, score.landmark_aus)
+        return np.array([seen.get(f"AU{code}", 0.0) for code in aus])
 
     def setup(score: StimulusScore) -> tuple[str, str, str, str]:
         s = score.stimulus
@@ -394,6 +406,7 @@ def run_recognition(
     from mien.rig.heads import load_head
     from mien.validate.au_solve import AUSolver
     from mien.validate.face_detector import FaceDetector
+    from mien.validate.landmark_aus import LandmarkAUs
     from mien.validate.stimuli import StimulusRenderer
 
     own = detector is None
@@ -408,6 +421,7 @@ def run_recognition(
     bar = progress_bar(range(len(stimuli)), total=len(stimuli), desc="recognition", enabled=progress)
     ticker = iter(bar)
     rigs: dict[tuple[str, str, bool], Any] = {}
+    estimators: dict[tuple[str, str, bool], LandmarkAUs] = {}
     try:
         for (head, identity, basis, view), indices in groups.items():
             started = time.perf_counter()
@@ -417,6 +431,11 @@ def run_recognition(
             rig = rigs[key]
             timings["load"] += time.perf_counter() - started
             with StimulusRenderer(rig, _camera(view), size) as renderer:
+                if key not in estimators:
+                    started = time.perf_counter()
+                    estimators[key] = LandmarkAUs(rig, renderer.weights)
+                    timings["load"] += time.perf_counter() - started
+                landmark_aus = estimators[key]
                 for index in indices:
                     stimulus = stimuli[index]
                     started = time.perf_counter()
@@ -440,6 +459,7 @@ def run_recognition(
                         bool(found.found and not found.landmarks_from_hint),
                         aus,
                         nose_lip,
+                        landmark_aus.estimate(deformed),
                     )
                     if keep_images and found.landmarks is not None:
                         images[index] = _judged_crop(rgb, found.landmarks)

@@ -115,6 +115,17 @@ def _emotions_section(result: Any, folder: Path) -> str:
         f"<b>{_pct(took_anger)}</b> by the classifier, <b>{_pct(result.facs_rate('anger', expression='disgust'))}"
         "</b> by the FACS reading (disgust read as disgust by its FACS signs: "
         f"<b>{_pct(result.facs_rate(expression='disgust'))}</b>)</li>",
+        "<li>disgust's nose wrinkle (AU9, the reading's source: the detector cannot see it) and upper-lip raise "
+        "(AU10) on the mesh's landmarks, mean 0..5, disgust / anger: "
+        + "; ".join(
+            f"{basis} AU9 <b>{result.landmark_au('AU9', expression='disgust', basis=basis):.1f}</b> / "
+            f"{result.landmark_au('AU9', expression='anger', basis=basis):.1f}, AU10 "
+            f"<b>{result.landmark_au('AU10', expression='disgust', basis=basis):.1f}</b> / "
+            f"{result.landmark_au('AU10', expression='anger', basis=basis):.1f}"
+            for basis in ("facs", "feature_points")
+            if result.subset(expression="disgust", basis=basis)
+        )
+        + "</li>",
         "</ul>",
         _table(header, rows),
     ]
