@@ -3,17 +3,17 @@
 The detector's AUs come from its blendshapes (:mod:`mien.validate.au_solve`), and MediaPipe's ``noseSneer``
 never moves, on the rigs or on the real human media (the rig report: AU9 is "not seen"). Disgust's nose wrinkle
 (AU9) is then invisible to the FACS reading, and a disgust whose other signs overlap anger's (Broekens' Table 1
-disgust pulls the inner brows 13 mm together and lifts the lower lids) reads as anger. SPEC (issue "Faces that
-read"): disgust's signs are measured "by the detector where it can see them, else by landmark geometry on the
-render". This module is that geometry.
+disgust pulls the inner brows 13 mm together and lifts the lower lids) reads as anger. The issue "Faces that read"
+asks for disgust's signs "by the detector where it can see them, else by landmark geometry on the render": this
+module is that geometry.
 
 Each AU here is measured by the rise of a few iBUG-68 landmarks on the deformed mesh (the rig's frame, before
 head pose, so the view does not matter) above the same rig's neutral. Each is scaled by what the rig's own AU at E
 (intensity 5, through the AU -> ARKit mapping) does, so that AU at E reads 5; AU9 is solved jointly with AU10, whose
 upper-lip raise lifts the nostril wings too (:meth:`LandmarkAUs.estimate`):
 
-* AU9 (nose wrinkler): the nostril wings, iBUG 31 and 35 (FACS Manual, AU9: "pulls the infraorbital triangle
-  and the nostril wings upward");
+* AU9 (nose wrinkler): the nostril wings, iBUG 31 and 35 (the FACS Manual's AU9 raises the nostril wings and
+  the infraorbital triangle);
 * AU10 (upper lip raiser): the top of the upper lip, iBUG 50, 51, 52.
 
 :data:`FROM_LANDMARKS` names the AUs whose landmark estimate stands in for the detector's in the FACS reading.
