@@ -54,7 +54,21 @@ def test_disgust_shows_its_nose_wrinkle_on_both_bases_and_anger_does_not(
 
 
 def test_only_the_detectors_blind_aus_are_replaced() -> None:
-    assert FROM_LANDMARKS == ("AU9",)
+    from mien.facs.catalogue import OPENFACS_AUS
+    from mien.validate.recognition import facs_reading
+
+    # what the detector sees of a disgust (lids lifted, a weak lip raise, lips parted: anger's signs, as on Table 1's
+    # disgust); the nose wrinkle measured on the mesh, which the detector cannot see, makes it disgust
+    aus = tuple(OPENFACS_AUS)
+    detected_face = {f"AU{code}": 0.0 for code in aus} | {"AU7": 1.3, "AU10": 1.0, "AU26": 1.0}
+    landmarks = {"AU9": 5.0, "AU10": 0.0}
+
+    def reading(face: dict[str, float]) -> str | None:
+        return facs_reading(np.array([face[f"AU{code}"] for code in aus]), np.zeros(len(aus)), aus)
+
+    assert reading(detected_face) == "anger"
+    assert reading(merged_aus(detected_face, landmarks)) == "disgust"
+    assert "AU10" not in FROM_LANDMARKS  # the detector's AU10 stands: the landmark 0.0 above did not replace it
     detected = {"AU4": 1.5, "AU9": 0.0, "AU10": 0.4}
     assert merged_aus(detected, {"AU9": 4.0, "AU10": 5.0}) == {"AU4": 1.5, "AU9": 4.0, "AU10": 0.4}
     assert merged_aus(detected, {}) == detected  # no landmark estimate (a rig that cannot raise them): unchanged

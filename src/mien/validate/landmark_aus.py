@@ -59,7 +59,7 @@ class LandmarkAUs:
     """
 
     def __init__(self, rig: Any, weights_of: Any) -> None:
-        from mien.facs.catalogue import FACE_CHANNELS
+        from mien.facs.catalogue import FACE_CHANNELS, au_channels
         from mien.rig.deform import Deformer
 
         self._landmarks = np.asarray(rig.landmarks)
@@ -68,9 +68,7 @@ class LandmarkAUs:
         columns = []
         for name in LANDMARK_POINTS:
             frame = np.zeros(len(FACE_CHANNELS))
-            for channel in (name, f"{name}L", f"{name}R"):
-                if channel in FACE_CHANNELS:
-                    frame[FACE_CHANNELS.index(channel)] = 5.0
+            frame[list(au_channels(int(name.removeprefix("AU"))))] = 5.0
             columns.append(self._rise(deformer.deform(np.asarray(weights_of(frame), np.float32))))
         self.rise_at_e_mm: np.ndarray = np.array(columns).T
         """(measures, AUs) millimetres: how far the rig's own AU at E (column, :data:`LANDMARK_POINTS` order)
@@ -97,14 +95,14 @@ class LandmarkAUs:
         if not self._usable.any():
             return {}
         rise = np.clip(self._rise(vertices), 0.0, None)
-        solved, _ = nnls(self.rise_at_e_mm[:, self._usable], rise)
-        names = [name for name, ok in zip(LANDMARK_POINTS, self._usable, strict=True) if ok]
-        values = dict(zip(names, solved, strict=True))
-        diagonal = np.diag(self.rise_at_e_mm)
-        for row, name in enumerate(LANDMARK_POINTS):
-            if name not in SOLVED and name in values:
-                values[name] = rise[row] / diagonal[row]
-        return {name: round(float(np.clip(5.0 * value, 0.0, 5.0)), 4) for name, value in values.items()}
+        own = rise / np.maximum(np.diag(self.rise_at_e_mm), 1e-9)  # each AU's landmarks over its own E
+        solved = np.zeros(len(rise))
+        solved[self._usable], _ = nnls(self.rise_at_e_mm[:, self._usable], rise)
+        return {
+            name: round(float(np.clip(5.0 * (solved[i] if name in SOLVED else own[i]), 0.0, 5.0)), 4)
+            for i, name in enumerate(LANDMARK_POINTS)
+            if self._usable[i]
+        }
 
 
 def merged_aus(detected: Mapping[str, float], from_landmarks: Mapping[str, float]) -> dict[str, float]:
