@@ -171,6 +171,20 @@ def test_facs_reading_matches_prototypes() -> None:
     assert facs_reading(anger + 0.4 * np.random.default_rng(0).random(len(aus)), np.zeros(len(aus)), aus) == "anger"
 
 
+def test_facs_reading_takes_the_nose_wrinkle_led_disgust_for_disgust() -> None:
+    from mien.facs.catalogue import OPENFACS_AUS
+    from mien.validate.recognition import facs_reading
+
+    # what the detector and the mesh's landmarks saw of Table 1's disgust at 1.2 (feature-point basis, mean of
+    # eight renders): the lids and brows of anger, the lips parted, and the nose wrinkled hard
+    aus = tuple(OPENFACS_AUS)
+    seen = {"AU4": 0.7, "AU7": 0.8, "AU9": 4.0, "AU10": 0.7, "AU25": 1.6, "AU26": 1.6}
+    face = np.array([seen.get(f"AU{code}", 0.0) for code in aus])
+    assert facs_reading(face, np.zeros(len(aus)), aus) == "disgust"
+    no_wrinkle = np.array([0.0 if code == 9 else seen.get(f"AU{code}", 0.0) for code in aus])
+    assert facs_reading(no_wrinkle, np.zeros(len(aus)), aus) == "anger"  # the same face without AU9 is anger
+
+
 def test_disgust_is_not_read_as_anger_by_its_facs_signs(ict_frontal: RecognitionResult) -> None:
     # the classifier answers "disgust" for almost nothing; the FACS reading tells disgust from anger
     assert ict_frontal.facs_rate(expression="disgust") >= 0.75

@@ -46,6 +46,7 @@ __all__ = [
     "EXPRESSIONS",
     "HUMAN_QUALITY",
     "LABEL_OF",
+    "READING_VARIANTS",
     "VIEWS",
     "RecognitionResult",
     "Stimulus",
@@ -336,24 +337,49 @@ def _json_default(value: object) -> object:
     raise TypeError(f"not JSON serialisable: {type(value).__name__}")
 
 
+READING_VARIANTS: dict[str, tuple[tuple[str, str], ...]] = {"disgust": (("AU9", "AU10"),)}
+"""Emotion -> AU pairs whose intensities :func:`facs_reading` also tries swapped in that emotion's prototype.
+
+EMFACS lists disgust led by the nose wrinkle and by the upper-lip raise alike (9+17 and 10+17; 9+16+15/26 and
+10+16+25/26: Ekman, Friesen & Hager 2002, Table 10-1). The v2 prototype renders the AU10-led form with a trace of
+AU9 (its AU9-led draft bared the teeth in a snarl read as anger), so the reading also matches the AU9-led form:
+Table 1's disgust wrinkles the nose hard (landmark AU9 4.0 at intensity 1.2) and is disgust to a FACS coder."""
+
+
+def _reading_templates(aus: Sequence[int]) -> tuple[tuple[str, ...], np.ndarray]:
+    """(emotion of each row, (rows, len(aus)) prototype intensities): each EMFACS prototype, then its variants."""
+    from mien.facs.prototypes import EMFACS_PROTOTYPES
+
+    names: list[str] = []
+    rows: list[list[float]] = []
+    for name, prototype in EMFACS_PROTOTYPES.items():
+        variants = [dict(prototype)]
+        for a, b in READING_VARIANTS.get(name, ()):
+            variants.append(prototype | {a: prototype.get(b, 0.0), b: prototype.get(a, 0.0)})
+        for variant in variants:
+            names.append(name)
+            rows.append([variant.get(f"AU{code}", 0.0) for code in aus])
+    return tuple(names), np.array(rows)
+
+
 def facs_reading(detected: np.ndarray, neutral: np.ndarray, aus: Sequence[int]) -> str | None:
     """The emotion whose EMFACS prototype best matches AUs ``detected`` above ``neutral`` (cosine similarity).
 
     ``detected`` / ``neutral``: (len(aus),) AU intensities 0..5 of the face and of the same setup's neutral, over
-    AU numbers ``aus``. None when nothing rose above the neutral (by more than 0.05 in total).
+    AU numbers ``aus``. An emotion's prototype may also match in the variant forms of :data:`READING_VARIANTS`.
+    None when nothing rose above the neutral (by more than 0.05 in total).
 
     >>> aus = (1, 2, 4, 5, 9, 10, 15, 17, 26)
     >>> face = np.array([0, 0, 0, 0, 1.0, 3.5, 2.5, 3.0, 0])
     >>> facs_reading(face, np.zeros(9), aus)
     'disgust'
+    >>> facs_reading(np.array([0, 0, 0.7, 0, 4.0, 0.7, 0, 0, 1.6]), np.zeros(9), aus)  # nose wrinkled hard
+    'disgust'
     """
-    from mien.facs.prototypes import EMFACS_PROTOTYPES
-
     rise = np.clip(np.asarray(detected, np.float64) - np.asarray(neutral, np.float64), 0.0, None)
     if rise.sum() <= 0.05:
         return None
-    names = tuple(EMFACS_PROTOTYPES)
-    table = np.array([[EMFACS_PROTOTYPES[n].get(f"AU{code}", 0.0) for code in aus] for n in names])
+    names, table = _reading_templates(aus)
     norms = np.linalg.norm(table, axis=1) * np.linalg.norm(rise)
     cosine = table @ rise / np.where(norms > 0, norms, 1.0)
     return names[int(np.argmax(cosine))]
