@@ -7,14 +7,19 @@ disgust pulls the inner brows 13 mm together and lifts the lower lids) reads as 
 asks for disgust's signs "by the detector where it can see them, else by landmark geometry on the render": this
 module is that geometry.
 
-Each AU here is measured by the rise of a few iBUG-68 landmarks on the deformed mesh (the rig's frame, before
-head pose, so the view does not matter) above the same rig's neutral. Each is scaled by what the rig's own AU at E
-(intensity 5, through the AU -> ARKit mapping) does, so that AU at E reads 5; AU9 is solved jointly with AU10, whose
-upper-lip raise lifts the nostril wings too (:meth:`LandmarkAUs.estimate`):
+Four measures, each the rise of a few iBUG-68 landmarks on the deformed mesh (the rig's frame, before head pose,
+so the view does not matter) above the same rig's neutral, a fall counting as 0 (:data:`LANDMARK_POINTS`):
 
-* AU9 (nose wrinkler): the nostril wings, iBUG 31 and 35 (the FACS Manual's AU9 raises the nostril wings and
-  the infraorbital triangle);
-* AU10 (upper lip raiser): the top of the upper lip, iBUG 50, 51, 52.
+* the nostril wings, iBUG 31 and 35 (the FACS Manual's AU9 raises the nostril wings and the infraorbital
+  triangle; AU10 raises them a little);
+* the top of the upper lip, iBUG 50, 51, 52 (AU10's own sign; AU9 raises it too);
+* the nose's ridge, iBUG 29 and 30 (AU9 pulls the skin along the sides of the nose up toward its root; AU10 hardly
+  moves it: on ICT-FaceKit 3.1 mm against 0.15 mm at E, where the other two measures move almost alike with both);
+* the nose's root, iBUG 27 (AU1's: on ICT-FaceKit the inner brow raiser drags the skin of the nose up with it).
+
+Each is scaled by what the rig's own AUs at E (intensity 5, through the AU -> ARKit mapping) do to it, so that an
+AU at E reads 5 (:meth:`LandmarkAUs.estimate`): AU10 is the upper lip's rise over its own at E; AU9 is solved jointly
+with AU10 and AU1 from all four measures, so neither an upper-lip raise nor a raised brow is a nose wrinkle.
 
 :data:`FROM_LANDMARKS` names the AUs whose landmark estimate stands in for the detector's in the FACS reading.
 """
@@ -26,10 +31,32 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["FROM_LANDMARKS", "LANDMARK_POINTS", "MIN_RISE_AT_E_MM", "SOLVED", "LandmarkAUs", "merged_aus"]
+__all__ = [
+    "FROM_LANDMARKS",
+    "LANDMARK_POINTS",
+    "MEASURED_BY",
+    "MIN_RISE_AT_E_MM",
+    "REPORTED",
+    "SOLVED",
+    "LandmarkAUs",
+    "merged_aus",
+]
 
-LANDMARK_POINTS: dict[str, tuple[int, ...]] = {"AU9": (31, 35), "AU10": (50, 51, 52)}
-"""AU -> the 0-based iBUG-68 landmarks whose mean rise measures it."""
+LANDMARK_POINTS: dict[str, tuple[int, ...]] = {
+    "nostril_wings": (31, 35),
+    "upper_lip": (50, 51, 52),
+    "nose_ridge": (29, 30),
+    "nose_root": (27,),
+}
+"""Measure -> the 0-based iBUG-68 landmarks whose mean rise it is."""
+
+MEASURED_BY: dict[str, str] = {"AU9": "nostril_wings", "AU10": "upper_lip", "AU1": "nose_root"}
+"""AU -> its own measure in :data:`LANDMARK_POINTS`: the AUs whose response at E is measured, in this order. AU1
+is there because on ICT-FaceKit the inner brow raiser drags the nose's ridge up (1.2 mm at E): solved with the
+others, a sad or surprised brow is not read as a nose wrinkle."""
+
+REPORTED: tuple[str, ...] = ("AU9", "AU10")
+"""The AUs :meth:`LandmarkAUs.estimate` returns (AU1 is the detector's to see)."""
 
 SOLVED: tuple[str, ...] = ("AU9",)
 """AUs estimated jointly with the others (their landmarks also move with another AU); the rest are their own
@@ -66,42 +93,50 @@ class LandmarkAUs:
         self._neutral = self._heights(np.asarray(rig.neutral, np.float64))
         deformer = Deformer(rig)
         columns = []
-        for name in LANDMARK_POINTS:
+        for name in MEASURED_BY:
             frame = np.zeros(len(FACE_CHANNELS))
             frame[list(au_channels(int(name.removeprefix("AU"))))] = 5.0
             columns.append(self._rise(deformer.deform(np.asarray(weights_of(frame), np.float32))))
         self.rise_at_e_mm: np.ndarray = np.array(columns).T
-        """(measures, AUs) millimetres: how far the rig's own AU at E (column, :data:`LANDMARK_POINTS` order)
-        raises each landmark set (row, same order). Off the diagonal is the rig's cross-talk: on ICT-FaceKit the
-        upper lip raiser lifts the nostril wings too."""
-        self._usable = np.diag(self.rise_at_e_mm) >= MIN_RISE_AT_E_MM
+        """(measures, AUs) millimetres: how far the rig's own AU at E (column, :data:`MEASURED_BY` order) raises
+        each landmark set (row, :data:`LANDMARK_POINTS` order; a fall counts as 0, as in :meth:`estimate`). On
+        ICT-FaceKit the upper lip raiser lifts the nostril wings too, and the nose wrinkler the upper lip."""
+        self._own = np.array([list(LANDMARK_POINTS).index(m) for m in MEASURED_BY.values()])
+        own_at_e = self.rise_at_e_mm[self._own, np.arange(len(MEASURED_BY))]
+        self._usable = own_at_e >= MIN_RISE_AT_E_MM
+        self._own_at_e = np.maximum(own_at_e, 1e-9)
+        self._row_scale = 1.0 / np.maximum(self.rise_at_e_mm.max(axis=1), MIN_RISE_AT_E_MM)
 
     def _heights(self, vertices: np.ndarray) -> np.ndarray:
         return np.array([np.mean(vertices[self._landmarks[list(ids)], 1]) for ids in LANDMARK_POINTS.values()])
 
     def _rise(self, vertices: np.ndarray) -> np.ndarray:
-        return (self._heights(np.asarray(vertices, np.float64)) - self._neutral) * 1e3
+        """Millimetres each landmark set rose above the neutral (0 where it fell: a lowered lip or brow is not
+        evidence against a raiser, and the jaw's drop lowers the lip of a snarl that still wrinkles the nose)."""
+        return np.clip((self._heights(np.asarray(vertices, np.float64)) - self._neutral) * 1e3, 0.0, None)
 
     def estimate(self, vertices: np.ndarray) -> dict[str, float]:
         """``{"AU9": 0..5, "AU10": 0..5}`` of a deformed mesh ((n_vertices, 3), the rig's frame, before head pose).
 
-        AU10 is the upper lip's rise over the rig's own AU10 at E. The nostril wings also rise with the upper lip, so
-        AU9 is solved from both rises through the rig's own response (:attr:`rise_at_e_mm`, non-negative least
-        squares): an upper-lip raise alone is not read as a nose wrinkle. An AU the rig itself cannot raise its
-        landmarks with by :data:`MIN_RISE_AT_E_MM` is left out.
+        AU10 is the upper lip's rise over the rig's own AU10 at E. The nostril wings and the upper lip rise with
+        both AUs, so AU9 is solved from all three measures through the rig's own response (:attr:`rise_at_e_mm`,
+        non-negative least squares, each measure scaled by its largest response at E so each counts alike): an
+        upper-lip raise alone is not read as a nose wrinkle. An AU the rig itself cannot raise its own measure with
+        by :data:`MIN_RISE_AT_E_MM` is left out.
         """
         from scipy.optimize import nnls
 
-        if not self._usable.any():
+        if not any(self._usable[i] for i, name in enumerate(MEASURED_BY) if name in REPORTED):
             return {}
-        rise = np.clip(self._rise(vertices), 0.0, None)
-        own = rise / np.maximum(np.diag(self.rise_at_e_mm), 1e-9)  # each AU's landmarks over its own E
-        solved = np.zeros(len(rise))
-        solved[self._usable], _ = nnls(self.rise_at_e_mm[:, self._usable], rise)
+        rise = self._rise(vertices)
+        own = rise[self._own] / self._own_at_e  # each AU's own measure over its own E
+        solved = np.zeros(len(MEASURED_BY))
+        response = self.rise_at_e_mm[:, self._usable] * self._row_scale[:, None]
+        solved[self._usable], _ = nnls(response, rise * self._row_scale)
         return {
             name: round(float(np.clip(5.0 * (solved[i] if name in SOLVED else own[i]), 0.0, 5.0)), 4)
-            for i, name in enumerate(LANDMARK_POINTS)
-            if self._usable[i]
+            for i, name in enumerate(MEASURED_BY)
+            if self._usable[i] and name in REPORTED
         }
 
 
