@@ -103,8 +103,8 @@ def _emotions_section(result: Any, folder: Path) -> str:
         "Quality = the mean probability of the target label (Broekens' metric target / (mean over labels x "
         "labels) with probabilities that sum to 1); the people's values are the study's, over ten labels. FACS "
         "reading = share whose detected AUs (above the same setup's neutral) best match the expression's EMFACS "
-        "prototype (a blend: one of its components), the judge for disgust, which the classifier almost never "
-        "names.</p>",
+        "prototype (a blend: one of its components; disgust also in its AU9-led EMFACS form), the judge for "
+        "disgust, which the classifier almost never names.</p>",
         "<ul>",
         "<li>joy, sadness, anger, surprise, fear, frontal (target 90%): "
         f"<b>{_pct(result.rate(expression=basics, view=frontal))}</b></li>",
