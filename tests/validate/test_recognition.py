@@ -176,7 +176,7 @@ def test_facs_reading_takes_the_nose_wrinkle_led_disgust_for_disgust() -> None:
     from mien.validate.recognition import facs_reading
 
     # what the detector and the mesh's landmarks saw of Table 1's disgust at 1.2 (feature-point basis, mean of
-    # eight renders): the lids and brows of anger, the lips parted, and the nose wrinkled hard
+    # the sixteen frontal renders): the lids and brows of anger, the lips parted, and the nose wrinkled hard
     aus = tuple(OPENFACS_AUS)
     seen = {"AU4": 0.7, "AU7": 0.8, "AU9": 4.0, "AU10": 0.7, "AU25": 1.6, "AU26": 1.6}
     face = np.array([seen.get(f"AU{code}", 0.0) for code in aus])

@@ -119,10 +119,11 @@ class LandmarkAUs:
         """``{"AU9": 0..5, "AU10": 0..5}`` of a deformed mesh ((n_vertices, 3), the rig's frame, before head pose).
 
         AU10 is the upper lip's rise over the rig's own AU10 at E. The nostril wings and the upper lip rise with
-        both AUs, so AU9 is solved from all three measures through the rig's own response (:attr:`rise_at_e_mm`,
-        non-negative least squares, each measure scaled by its largest response at E so each counts alike): an
-        upper-lip raise alone is not read as a nose wrinkle. An AU the rig itself cannot raise its own measure with
-        by :data:`MIN_RISE_AT_E_MM` is left out.
+        AU9 and AU10 alike, and AU1 lifts the nose's ridge, so AU9 is solved with AU10 and AU1 from all four
+        measures through the rig's own response (:attr:`rise_at_e_mm`, non-negative least squares, each measure
+        scaled by its largest response at E so each counts alike): an upper-lip raise or a raised brow alone is not
+        read as a nose wrinkle. An AU the rig itself cannot raise its own measure with by :data:`MIN_RISE_AT_E_MM`
+        is left out of the solve and of the result.
         """
         from scipy.optimize import nnls
 
