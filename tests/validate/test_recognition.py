@@ -149,11 +149,18 @@ def test_disgust_shows_its_facs_signs(ict_frontal: RecognitionResult) -> None:
         # upper-lip raiser seen by the detector, and the nose-to-lip distance shortened on the mesh
         assert score.aus["AU10"] > max(s.aus["AU10"] for s in neutral) + 0.5
         assert score.nose_lip_mm < lip_neutral - 1.0
-        # the landmark estimate of the upper-lip raise agrees (on ICT its trace of AU9 is lost in AU10's cross-talk)
+        # the landmark estimates agree: the upper-lip raise, and the prototype's trace of AU9 (1 x 1.2), which the
+        # nose's ridge tells from AU10's cross-talk on ICT (it read 0 from the nostrils and the lip alone)
         assert score.landmark_aus["AU10"] > 2.0
+        assert score.landmark_aus["AU9"] > 0.5
     assert all(s.landmark_aus == {"AU9": 0.0, "AU10": 0.0} for s in neutral)
     for score in ict_frontal.subset(expression="anger"):
         assert score.landmark_aus["AU9"] < 0.6
+    # what the CLI and the report print: disgust's signs on the mesh next to anger's
+    signs = ict_frontal.disgust_signs()
+    assert set(signs) == {"facs"}
+    assert signs["facs"]["disgust"]["AU9"] > signs["facs"]["anger"]["AU9"] + 0.5
+    assert signs["facs"]["disgust"]["AU10"] > signs["facs"]["anger"]["AU10"]
 
 
 def test_facs_reading_matches_prototypes() -> None:

@@ -209,14 +209,9 @@ def run_emotions(args: argparse.Namespace) -> int:
         by_classifier = result.label_rate("angry", expression="disgust")
         by_facs = result.facs_rate("anger", expression="disgust")
         print(f"disgust taken for anger: classifier {by_classifier:.0%}, FACS reading {by_facs:.0%}")
-        for basis in ("facs", "feature_points"):
-            if result.subset(expression="disgust", basis=basis):
-                signs = ", ".join(
-                    f"{name} AU9 {result.landmark_au('AU9', expression=name, basis=basis):.1f} "
-                    f"AU10 {result.landmark_au('AU10', expression=name, basis=basis):.1f}"
-                    for name in ("disgust", "anger")
-                )
-                print(f"  on the mesh's landmarks (0..5), {basis}: {signs}")
+        for basis, by_name in result.disgust_signs().items():
+            signs = ", ".join(f"{name} AU9 {au['AU9']:.1f} AU10 {au['AU10']:.1f}" for name, au in by_name.items())
+            print(f"  on the mesh's landmarks (0..5), {basis}: {signs}")
     print(f"wrote {len(written)} files to {args.out} (recognition.json, sheet_*.png, confusion.png, quality.png)")
     return 0
 

@@ -33,6 +33,7 @@ import json
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -266,6 +267,18 @@ class RecognitionResult:
         values = [s.landmark_aus[au] for s in self.subset(**conditions) if au in s.landmark_aus]
         return float(np.mean(values)) if values else float("nan")
 
+    def disgust_signs(self) -> dict[str, dict[str, dict[str, float]]]:
+        """``{basis: {"disgust" | "anger": {"AU9": mean, "AU10": mean}}}``: disgust's nose wrinkle and upper-lip
+        raise on the mesh's landmarks next to anger's (:meth:`landmark_au`), for each basis that has disgust."""
+        return {
+            basis: {
+                name: {au: self.landmark_au(au, expression=name, basis=basis) for au in ("AU9", "AU10")}
+                for name in ("disgust", "anger")
+            }
+            for basis in ("facs", "feature_points")
+            if self.subset(expression="disgust", basis=basis)
+        }
+
     def facs_rate(self, read_as: str | None = None, **conditions: Any) -> float:
         """Share of matching stimuli whose FACS reading is ``read_as`` (default: each one's own expression; a
         blend counts when the reading is one of its components); nan when none has a reading."""
@@ -346,8 +359,10 @@ AU9 (its AU9-led draft bared the teeth in a snarl read as anger), so the reading
 Table 1's disgust wrinkles the nose hard (landmark AU9 4.0 at intensity 1.2) and is disgust to a FACS coder."""
 
 
-def _reading_templates(aus: Sequence[int]) -> tuple[tuple[str, ...], np.ndarray]:
-    """(emotion of each row, (rows, len(aus)) prototype intensities): each EMFACS prototype, then its variants."""
+@cache
+def _reading_templates(aus: tuple[int, ...]) -> tuple[tuple[str, ...], np.ndarray]:
+    """(emotion of each row, (rows, len(aus)) prototype intensities): each EMFACS prototype, then its variants
+    (built once per AU list; the array is read-only)."""
     from mien.facs.prototypes import EMFACS_PROTOTYPES
 
     names: list[str] = []
@@ -359,7 +374,9 @@ def _reading_templates(aus: Sequence[int]) -> tuple[tuple[str, ...], np.ndarray]
         for variant in variants:
             names.append(name)
             rows.append([variant.get(f"AU{code}", 0.0) for code in aus])
-    return tuple(names), np.array(rows)
+    table = np.array(rows)
+    table.setflags(write=False)
+    return tuple(names), table
 
 
 def facs_reading(detected: np.ndarray, neutral: np.ndarray, aus: Sequence[int]) -> str | None:
@@ -379,7 +396,7 @@ def facs_reading(detected: np.ndarray, neutral: np.ndarray, aus: Sequence[int]) 
     rise = np.clip(np.asarray(detected, np.float64) - np.asarray(neutral, np.float64), 0.0, None)
     if rise.sum() <= 0.05:
         return None
-    names, table = _reading_templates(aus)
+    names, table = _reading_templates(tuple(int(code) for code in aus))
     norms = np.linalg.norm(table, axis=1) * np.linalg.norm(rise)
     cosine = table @ rise / np.where(norms > 0, norms, 1.0)
     return names[int(np.argmax(cosine))]

@@ -118,12 +118,9 @@ def _emotions_section(result: Any, folder: Path) -> str:
         "<li>disgust's nose wrinkle (AU9, the reading's source: the detector cannot see it) and upper-lip raise "
         "(AU10) on the mesh's landmarks, mean 0..5, disgust / anger: "
         + "; ".join(
-            f"{basis} AU9 <b>{result.landmark_au('AU9', expression='disgust', basis=basis):.1f}</b> / "
-            f"{result.landmark_au('AU9', expression='anger', basis=basis):.1f}, AU10 "
-            f"<b>{result.landmark_au('AU10', expression='disgust', basis=basis):.1f}</b> / "
-            f"{result.landmark_au('AU10', expression='anger', basis=basis):.1f}"
-            for basis in ("facs", "feature_points")
-            if result.subset(expression="disgust", basis=basis)
+            f"{basis} "
+            + ", ".join(f"{au} <b>{signs['disgust'][au]:.1f}</b> / {signs['anger'][au]:.1f}" for au in ("AU9", "AU10"))
+            for basis, signs in result.disgust_signs().items()
         )
         + "</li>",
         "</ul>",
