@@ -20,6 +20,7 @@ from mien.cli import main
         (["validate", "emotions", "--head", "builtin", "--intensities", "9"], "intensity=9.0"),
         (["validate", "emotions", "--head", "builtin", "--expressions", "bored"], "unknown expression 'bored'"),
         (["validate", "emotions", "--head", "builtin", "--size", "0x5"], "size='0x5'"),
+        (["validate", "emotions", "--head", "builtin", "--framing", "haar"], "invalid choice: 'haar'"),
         (["validate", "rig", "--head", "builtin", "--aus", "x"], "aus='x'"),
         (["validate", "report", "--head", "builtin", "--video", "/no/such/video.mp4"], "/no/such/video.mp4"),
     ],

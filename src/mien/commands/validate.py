@@ -82,6 +82,13 @@ def _add_common(parser: argparse.ArgumentParser, default_out: str) -> None:
         type=input_file,
         help="emotion classifier .tflite (default: $MIEN_EMOTION_MODEL or the config)",
     )
+    parser.add_argument(
+        "--framing",
+        choices=("landmarks", "fer"),
+        default="landmarks",
+        help="how the emotion classifier's crop is framed: landmarks (brows to chin, the default) or fer "
+        "(the fer package's Haar-box framing, forehead to chin, calibrated on real faces; see docs/VALIDATION.md)",
+    )
     parser.add_argument("--size", default="512x512", help="render size WIDTHxHEIGHT (default %(default)s)")
     parser.add_argument("--quiet", action="store_true", help="no progress bars")
 
@@ -171,7 +178,7 @@ def _detector(args: argparse.Namespace, emotions: bool = True) -> Any:
     require_asset("face_landmarker", args.landmarker)
     if emotions:
         require_asset("emotion_model", args.emotion_model)
-    return FaceDetector(args.landmarker, args.emotion_model, emotions=emotions)
+    return FaceDetector(args.landmarker, args.emotion_model, emotions=emotions, framing=args.framing)
 
 
 def emotions_result(args: argparse.Namespace, heads: list[tuple[str, str]]) -> Any:

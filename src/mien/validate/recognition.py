@@ -427,13 +427,13 @@ def _with_facs_readings(scores: Sequence[StimulusScore], aus: Sequence[int]) -> 
     return tuple(out)
 
 
-def _judged_crop(rgb: np.ndarray, landmarks: np.ndarray, side: int = 160) -> np.ndarray:
-    """The colour version of the square the classifier saw, ``side`` pixels wide."""
+def _judged_crop(rgb: np.ndarray, landmarks: np.ndarray, framing: str, side: int = 160) -> np.ndarray:
+    """The colour version of the square the classifier saw (cropped with ``framing``), ``side`` pixels wide."""
     from PIL import Image
 
     from mien.validate.emotion_classifier import crop_square, face_box
 
-    patch = crop_square(rgb, face_box(landmarks))
+    patch = crop_square(rgb, face_box(landmarks, framing))
     return np.asarray(Image.fromarray(patch).resize((side, side), Image.Resampling.BILINEAR))
 
 
@@ -505,7 +505,7 @@ def run_recognition(
                         landmark_aus.estimate(deformed),
                     )
                     if keep_images and found.landmarks is not None:
-                        images[index] = _judged_crop(rgb, found.landmarks)
+                        images[index] = _judged_crop(rgb, found.landmarks, getattr(active, "framing", "landmarks"))
                     next(ticker, None)
     finally:
         if own:
