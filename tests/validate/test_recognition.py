@@ -47,6 +47,32 @@ def test_rate_quality_and_confusion_on_fixed_numbers() -> None:
     assert result.to_json()["recognition"]["joy"] == 0.5
 
 
+def test_rates_under_another_crop_framing_on_fixed_numbers() -> None:
+    def framed(expression: str, main: dict[str, float], fer: dict[str, float] | None) -> StimulusScore:
+        score = _score(expression, main)
+        other = {} if fer is None else {"fer": tuple(fer.get(label, 0.0) for label in EMOTION_LABELS)}
+        return StimulusScore(score.stimulus, score.emotions, True, other_framings=other)
+
+    scores = (
+        framed("neutral", {"sad": 0.6, "neutral": 0.4}, {"neutral": 0.9, "sad": 0.1}),
+        framed("joy", {"happy": 0.9, "neutral": 0.1}, {"neutral": 0.6, "happy": 0.4}),
+        framed("evil", {"happy": 0.5, "angry": 0.3, "sad": 0.2}, {"angry": 0.5, "happy": 0.4, "sad": 0.1}),
+        framed("joy", {"happy": 0.9, "neutral": 0.1}, None),  # not measured in that framing: not judged there
+    )
+    result = RecognitionResult(scores, "fixed", {})
+    assert result.framings == ("landmarks", "fer")
+    assert result.rate(expression="neutral") == 0.0 and result.framed_rate("fer", expression="neutral") == 1.0
+    assert result.framed_rate("landmarks", expression="joy") == 1.0
+    assert result.framed_rate("fer", expression="joy") == 0.0  # the unmeasured render is left out, not a miss
+    assert result.framed_rate("fer", expression="evil") == 1.0  # top two: angry, happy
+    assert np.isnan(result.framed_rate("other", expression="joy"))
+    summary = result.framing_summary()
+    assert summary["fer"]["neutral"] == 1.0 and summary["landmarks"]["neutral"] == 0.0
+    data = result.to_json()
+    assert data["framing"] == "landmarks" and data["recognition_by_framing"]["fer"]["neutral"] == 1.0
+    assert data["stimuli"][0]["other_framings"]["fer"][EMOTION_LABELS.index("neutral")] == 0.9
+
+
 def test_stimuli_cover_the_study_conditions_and_refuse_unknowns() -> None:
     stimuli = study_stimuli([("builtin", "default")], ("facs",), ("frontal-1m", "lateral-3m"), (1.2, 2.4))
     assert len(stimuli) == 2 * (1 + 10 * 2)
@@ -90,6 +116,9 @@ def test_quick_validation_five_emotions_frontal(ict_frontal: RecognitionResult) 
         assert ict_frontal.rate(expression=name) >= 0.75, name
     assert ict_frontal.rate(expression="neutral") == 1.0
     assert all(score.face_found for score in ict_frontal.scores)
+    # every render is also judged in fer's own crop framing (docs/VALIDATION.md, fourteenth pass)
+    assert all(len(score.other_framings["fer"]) == len(EMOTION_LABELS) for score in ict_frontal.scores)
+    assert ict_frontal.framed_rate("fer", expression="neutral") == 1.0
 
 
 @pytest.fixture(scope="module")

@@ -212,6 +212,13 @@ def run_emotions(args: argparse.Namespace) -> int:
         print(f"  {name:13s} {result.rate(expression=name):6.0%}   quality {result.quality(name):.2f}{facs}")
     frontal = result.rate(expression=basics, view=("frontal-1m", "frontal-3m"))
     print(f"joy, sadness, anger, surprise, fear, frontal: {frontal:.0%}")
+    summary = result.framing_summary()
+    if len(summary) > 1:
+        print("the five (frontal / 45 degrees) and neutral, with the classifier's crop in each framing:")
+        for framing, rates in summary.items():
+            used = " (used above)" if framing == result.framing else ""
+            figures = " / ".join(f"{rates[k]:.0%}" for k in ("frontal", "oblique"))
+            print(f"  {framing + used:20s} {figures}, neutral {rates['neutral']:.0%}")
     if result.subset(expression="disgust"):
         by_classifier = result.label_rate("angry", expression="disgust")
         by_facs = result.facs_rate("anger", expression="disgust")

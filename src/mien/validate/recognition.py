@@ -149,6 +149,14 @@ class StimulusScore:
     facs_top: str | None = None
     """The FACS reading: the emotion whose EMFACS prototype best matches the AUs detected above the same
     setup's neutral (see the module docstring); None without blendshapes, for neutral, or when nothing moved."""
+    other_framings: dict[str, tuple[float, ...]] = field(default_factory=dict)
+    """The classifier's probabilities on the same render cropped in its other framings
+    (:data:`~mien.validate.emotion_classifier.FRAMINGS`), keyed by framing; empty for other detectors."""
+
+    def _probabilities(self, framing: str | None) -> tuple[float, ...]:
+        if framing is None:
+            return self.emotions
+        return self.other_framings.get(framing, ())
 
     @property
     def top(self) -> str:
@@ -161,13 +169,24 @@ class StimulusScore:
         order = np.argsort(self.emotions)[::-1]
         return EMOTION_LABELS[int(order[0])], EMOTION_LABELS[int(order[1])]
 
-    def correct(self) -> bool | None:
-        """Recognised? (top label for basics and neutral; top two for blends); None if not judgeable."""
+    def correct(self, framing: str | None = None) -> bool | None:
+        """Recognised? (top label for basics and neutral; top two for blends); None if not judgeable.
+
+        ``framing``: judge the probabilities of that other crop framing (:attr:`other_framings`) instead; None
+        when it was not measured.
+        """
+        probabilities = self._probabilities(framing)
+        if len(probabilities) != len(EMOTION_LABELS) or not np.all(np.isfinite(probabilities)):
+            return None if framing is not None else self._correct_labels(self.top, self.top2)
+        order = np.argsort(probabilities)[::-1]
+        first, second = EMOTION_LABELS[int(order[0])], EMOTION_LABELS[int(order[1])]
+        return self._correct_labels(first, (first, second))
+
+    def _correct_labels(self, top: str, top2: tuple[str, str]) -> bool:
         name = self.stimulus.expression
         if name in BLEND_COMPONENTS:
-            wanted = {LABEL_OF[c] for c in BLEND_COMPONENTS[name]}
-            return set(self.top2) == wanted
-        return self.top == LABEL_OF[name]
+            return set(top2) == {LABEL_OF[c] for c in BLEND_COMPONENTS[name]}
+        return top == LABEL_OF[name]
 
 
 def study_stimuli(
@@ -239,6 +258,9 @@ class RecognitionResult:
     """Seconds spent per stage (``render``, ``detect``, ``load``)."""
     images: dict[int, np.ndarray] = field(default_factory=dict, repr=False)
     """Index into :attr:`scores` -> the (s, s, 3) uint8 colour crop the classifier judged (kept when asked)."""
+    framing: str = "landmarks"
+    """The crop framing of :attr:`StimulusScore.emotions` (the others are in
+    :attr:`StimulusScore.other_framings`)."""
 
     def subset(self, **conditions: Any) -> list[StimulusScore]:
         """Scores whose stimulus matches every ``field=value`` (a value may be a tuple of allowed values)."""
@@ -256,6 +278,35 @@ class RecognitionResult:
         """Share of matching stimuli recognised (nan when none match)."""
         judged = [float(j) for j in (s.correct() for s in self.subset(**conditions)) if j is not None]
         return float(np.mean(judged)) if judged else float("nan")
+
+    def framed_rate(self, framing: str, **conditions: Any) -> float:
+        """:meth:`rate` with the classifier's crop in ``framing`` (nan when that framing was not measured)."""
+        if framing == self.framing:
+            return self.rate(**conditions)
+        judged = [float(j) for j in (s.correct(framing) for s in self.subset(**conditions)) if j is not None]
+        return float(np.mean(judged)) if judged else float("nan")
+
+    @property
+    def framings(self) -> tuple[str, ...]:
+        """Every crop framing measured: :attr:`framing` first, then the others."""
+        others = {name for score in self.scores for name in score.other_framings}
+        return (self.framing, *sorted(others - {self.framing}))
+
+    def framing_summary(self) -> dict[str, dict[str, float]]:
+        """``{framing: {"frontal": .., "oblique": .., "neutral": ..}}``: the five basic emotions recognised frontally
+        and at 45 degrees, and neutral read as neutral, with the classifier's crop in each measured framing."""
+        basics = ("joy", "sadness", "anger", "surprise", "fear")
+        views = {
+            "frontal": tuple(v for v in VIEWS if v.startswith("frontal")),
+            "oblique": tuple(v for v in VIEWS if v.startswith("oblique")),
+        }
+        return {
+            framing: {
+                **{name: self.framed_rate(framing, expression=basics, view=v) for name, v in views.items()},
+                "neutral": self.framed_rate(framing, expression="neutral"),
+            }
+            for framing in self.framings
+        }
 
     def label_rate(self, label: str, **conditions: Any) -> float:
         """Share of matching stimuli whose top classifier label is ``label`` (``"angry"``...); nan when none match."""
@@ -313,6 +364,7 @@ class RecognitionResult:
         rows, matrix = self.confusion()
         return {
             "detector": self.detector,
+            "framing": self.framing,
             "labels": list(EMOTION_LABELS),
             "stimuli": [
                 {
@@ -325,10 +377,15 @@ class RecognitionResult:
                     "nose_lip_mm": None if not np.isfinite(s.nose_lip_mm) else round(s.nose_lip_mm, 3),
                     "landmark_aus": {k: round(v, 3) for k, v in s.landmark_aus.items()},
                     "facs_top": s.facs_top,
+                    "other_framings": {k: [round(float(p), 4) for p in v] for k, v in s.other_framings.items()},
                 }
                 for s in self.scores
             ],
             "recognition": {e: self.rate(expression=e) for e in ("neutral", *EXPRESSIONS)},
+            "recognition_by_framing": {
+                framing: {e: self.framed_rate(framing, expression=e) for e in ("neutral", *EXPRESSIONS)}
+                for framing in self.framings
+            },
             "quality": {e: {"machine": self.quality(e), "human": HUMAN_QUALITY.get(e)} for e in EXPRESSIONS},
             "facs_reading": {e: self.facs_rate(expression=e) for e in EXPRESSIONS},
             "confusion": {"rows": rows, "matrix": matrix.tolist()},
@@ -448,12 +505,15 @@ def run_recognition(
     from mien.progress import progress as progress_bar
     from mien.rig.heads import load_head
     from mien.validate.au_solve import AUSolver
+    from mien.validate.emotion_classifier import FRAMINGS, face_crop
     from mien.validate.face_detector import FaceDetector
     from mien.validate.landmark_aus import LandmarkAUs
     from mien.validate.stimuli import StimulusRenderer
 
     own = detector is None
     active: Detector = FaceDetector() if detector is None else detector
+    framing = str(getattr(active, "framing", "landmarks"))
+    classifier = _framed_classifier(active)
     timings = {"load": 0.0, "render": 0.0, "detect": 0.0}
     solver = AUSolver()  # the 18 OpenFACS AUs: AU9/AU10 for disgust's signs, all of them for the FACS reading
     scores: list[StimulusScore | None] = [None] * len(stimuli)
@@ -496,6 +556,12 @@ def run_recognition(
                     if found.blendshapes is not None:
                         values = solver.solve(found.blendshapes)
                         aus = {f"AU{code}": float(v) for code, v in zip(solver.aus, values, strict=True)}
+                    others = {}
+                    if classifier is not None and found.landmarks is not None:
+                        for name in FRAMINGS:
+                            if name != framing:
+                                crop = face_crop(rgb, found.landmarks, name)
+                                others[name] = tuple(float(p) for p in classifier.classify_crop(crop))
                     scores[index] = StimulusScore(
                         stimulus,
                         tuple(float(p) for p in emotions),
@@ -503,9 +569,10 @@ def run_recognition(
                         aus,
                         nose_lip,
                         landmark_aus.estimate(deformed),
+                        other_framings=others,
                     )
                     if keep_images and found.landmarks is not None:
-                        images[index] = _judged_crop(rgb, found.landmarks, getattr(active, "framing", "landmarks"))
+                        images[index] = _judged_crop(rgb, found.landmarks, framing)
                     next(ticker, None)
     finally:
         if own:
@@ -513,7 +580,15 @@ def run_recognition(
     for _ in ticker:
         pass
     done = _with_facs_readings([s for s in scores if s is not None], solver.aus)
-    return RecognitionResult(done, active.name, {k: round(v, 3) for k, v in timings.items()}, images)
+    return RecognitionResult(done, active.name, {k: round(v, 3) for k, v in timings.items()}, images, framing)
+
+
+def _framed_classifier(detector: Any) -> Any:
+    """The FER classifier inside ``detector`` (a :class:`~mien.validate.face_detector.FaceDetector` or
+    :class:`~mien.validate.face_detector.EmotionDetector`), to judge each render in the other framings too; None
+    for other detectors."""
+    emotion = getattr(detector, "emotion", detector)
+    return getattr(emotion, "classifier", None)
 
 
 def _sheet_label(score: StimulusScore) -> str:

@@ -123,6 +123,7 @@ def _emotions_section(result: Any, folder: Path) -> str:
             for basis, signs in result.disgust_signs().items()
         )
         + "</li>",
+        _framing_item(result),
         "</ul>",
         _table(header, rows),
     ]
@@ -133,6 +134,23 @@ def _emotions_section(result: Any, folder: Path) -> str:
     for sheet in sorted(folder.glob("sheet_*.png")):
         lines.append(f"<h4>{html.escape(sheet.stem.removeprefix('sheet_'))}</h4>{_img(sheet, sheet.stem)}")
     return "\n".join(lines)
+
+
+def _framing_item(result: Any) -> str:
+    """The five and neutral with the classifier's crop in each framing (empty with one framing)."""
+    summary = result.framing_summary()
+    if len(summary) < 2:
+        return ""
+    parts = [
+        f"{html.escape(framing)}{' (used above)' if framing == result.framing else ''}: frontal "
+        f"<b>{_pct(rates['frontal'])}</b>, 45 degrees <b>{_pct(rates['oblique'])}</b>, neutral "
+        f"<b>{_pct(rates['neutral'])}</b>"
+        for framing, rates in summary.items()
+    ]
+    return (
+        "<li>the same render judged with the classifier's crop in each framing (landmarks: brows to chin; fer: the "
+        "fer package's Haar box, forehead to chin; docs/VALIDATION.md): " + "; ".join(parts) + "</li>"
+    )
 
 
 def _rig_section(result: Any, folder: Path) -> str:
