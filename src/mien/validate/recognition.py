@@ -550,18 +550,18 @@ def run_recognition(
                     timings["render"] += time.perf_counter() - started
                     started = time.perf_counter()
                     found = active.detect(rgb, hint)
-                    timings["detect"] += time.perf_counter() - started
-                    emotions = found.emotions if found.emotions is not None else np.full(len(EMOTION_LABELS), np.nan)
-                    aus: dict[str, float] = {}
-                    if found.blendshapes is not None:
-                        values = solver.solve(found.blendshapes)
-                        aus = {f"AU{code}": float(v) for code, v in zip(solver.aus, values, strict=True)}
                     others = {}
                     if classifier is not None and found.landmarks is not None:
                         for name in FRAMINGS:
                             if name != framing:
                                 crop = face_crop(rgb, found.landmarks, name)
                                 others[name] = tuple(float(p) for p in classifier.classify_crop(crop))
+                    timings["detect"] += time.perf_counter() - started
+                    emotions = found.emotions if found.emotions is not None else np.full(len(EMOTION_LABELS), np.nan)
+                    aus: dict[str, float] = {}
+                    if found.blendshapes is not None:
+                        values = solver.solve(found.blendshapes)
+                        aus = {f"AU{code}": float(v) for code, v in zip(solver.aus, values, strict=True)}
                     scores[index] = StimulusScore(
                         stimulus,
                         tuple(float(p) for p in emotions),
