@@ -283,6 +283,28 @@ def test_open_jaw_at_45_degrees_shows_the_far_side_teeth(identity: str) -> None:
     assert np.ptp(upper[:, 1]) > 0.33 * np.ptp(lips[:, 1])
 
 
+@pytest.mark.parametrize("identity", ["default", "b"])
+def test_an_opening_mouth_ends_in_closed_corners(identity: str) -> None:
+    # The lips part in the middle and meet at the corners. Before the corners were closed, anger at 1.2 opened the
+    # lips 6.2 mm apart one column (2 mm) from each corner, a square end past the vermilion that showed as a dark
+    # wedge cut into the skin; now 0.3 mm there, 3 mm two columns in, the middle 16 mm (a rounded end).
+    from mien.rig.head_targets import LIPS_PARTING, arkit_deltas
+
+    mesh = builtin_head_mesh(identity)
+    deltas = arkit_deltas(mesh)
+    upper, lower = mesh.mouth_seam["upper"], mesh.mouth_seam["lower"]
+    middle = len(upper) // 2
+    for names in (("jawOpen",), LIPS_PARTING, ("jawOpen", "mouthUpperUpLeft", "mouthUpperUpRight", "mouthStretchLeft")):
+        moved_to = mesh.vertices + sum(deltas[name] for name in names)
+        gap = np.linalg.norm(moved_to[upper] - moved_to[lower], axis=1)
+        assert gap[middle] > 0.02, names  # the mouth does open
+        for near_corner in (1, -2):
+            assert gap[near_corner] < 0.1 * gap[middle] and gap[near_corner] < 0.002, (names, gap[near_corner])
+    # a smile keeps its corners (the buccal corridor): closing them there turned built-in smiles sad
+    smile = mesh.vertices + deltas["mouthSmileLeft"]
+    assert np.linalg.norm(smile[upper[-2]] - smile[lower[-2]]) > 0.001
+
+
 def test_hairline_is_drawn_without_steps() -> None:
     # per-vertex colour is interpolated across each triangle, so a triangle that spans the whole hair/skin ramp
     # draws a step; toward the nape the hairline drops steeply across sparse columns and its ramp widens there

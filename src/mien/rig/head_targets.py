@@ -30,7 +30,7 @@ from mien.rig.head_geometry import (
     smoothstep,
 )
 
-__all__ = ["JAW_OPEN_RAD", "arkit_deltas", "jaw_weights", "lid_weights"]
+__all__ = ["CORNER_CLOSE_M", "JAW_OPEN_RAD", "LIPS_PARTING", "arkit_deltas", "jaw_weights", "lid_weights"]
 
 JAW_OPEN_RAD = 0.32
 """Jaw rotation at ``jawOpen`` = 1, radians (about 18 degrees)."""
@@ -38,6 +38,22 @@ EYE_YAW_RAD = np.radians(30.0)
 """Eyeball rotation at ``eyeLookIn``/``eyeLookOut`` = 1."""
 EYE_PITCH_RAD = np.radians(25.0)
 """Eyeball rotation at ``eyeLookUp``/``eyeLookDown`` = 1."""
+CORNER_CLOSE_M = 0.008
+"""Within this distance of a mouth corner the two lips' edges move together in :data:`LIPS_PARTING` (fully at the
+corner, not at all this far in), so an opening mouth ends in closed, rounded corners inside the vermilion."""
+LIPS_PARTING: tuple[str, ...] = (
+    "jawOpen",
+    "mouthUpperUpLeft",
+    "mouthUpperUpRight",
+    "mouthLowerDownLeft",
+    "mouthLowerDownRight",
+    "mouthStretchLeft",
+    "mouthStretchRight",
+)
+"""The targets that part the lips by themselves. Before the corners were closed, each opened the slit right to the
+corners, past where the vermilion ends, and an open mouth (anger, fear, surprise) showed dark wedges cutting into
+the skin at its corners, at 45 degrees most (docs/VALIDATION.md, fourteenth pass). ``mouthSmile`` keeps its open
+corners: a smile's corners open on the dark buccal corridor, and the built-in smiles at 1.2 read sad without it."""
 
 
 def _rot_x(p: np.ndarray, pivot: np.ndarray, angle: np.ndarray) -> np.ndarray:
@@ -297,4 +313,21 @@ def arkit_deltas(mesh: HeadMesh) -> dict[str, np.ndarray]:
 
     missing = [name for name in ARKIT_NAMES if name not in out]
     assert not missing, missing
+    _close_corners(out, mesh)
     return {name: out[name] for name in ARKIT_NAMES}
+
+
+def _close_corners(out: dict[str, np.ndarray], mesh: HeadMesh) -> None:
+    """Move the two lips' edges near each mouth corner together in :data:`LIPS_PARTING` (in place)."""
+    seam = mesh.mouth_seam
+    half_width = mesh.shape.mouth_half_width_m
+    for upper_key, lower_key in (("upper", "lower"), ("inner_upper", "inner_lower")):
+        upper, lower = seam[upper_key], seam[lower_key]
+        if len(upper) != len(lower):
+            continue
+        apart = smoothstep(0.0, CORNER_CLOSE_M, half_width - np.abs(mesh.material[upper, 0]))[:, None]
+        for name in LIPS_PARTING:
+            delta = out[name]
+            middle = 0.5 * (delta[upper] + delta[lower])
+            delta[upper] = middle + (delta[upper] - middle) * apart
+            delta[lower] = middle + (delta[lower] - middle) * apart
