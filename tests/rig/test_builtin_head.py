@@ -307,8 +307,8 @@ def test_an_opening_mouth_ends_in_closed_corners(identity: str) -> None:
 
 def test_hairline_is_drawn_without_steps() -> None:
     # per-vertex colour is interpolated across each triangle, so a triangle that spans the whole hair/skin ramp
-    # draws a step; toward the nape the hairline drops steeply across sparse columns and its ramp widens there
-    # (99th percentile of the span per triangle 0.67 with the narrow ramp)
+    # draws a step; toward the nape and round the sides the hairline drops steeply across sparse columns and its
+    # ramp widens there (99th percentile of the span per triangle toward the nape 0.67 with the narrow ramp)
     from mien.rig.head_geometry import SKIN, Z_CENTRE, skin_masks
 
     for identity in BUILTIN_IDENTITIES:
@@ -319,8 +319,11 @@ def test_hairline_is_drawn_without_steps() -> None:
         faces = mesh.faces[np.all(skin[mesh.faces], axis=1)]
         centre = mesh.vertices[faces].mean(axis=1)
         facing = (centre[:, 2] - Z_CENTRE) / np.hypot(centre[:, 0], centre[:, 2] - Z_CENTRE)
-        span = np.ptp(hair[faces], axis=1)[facing < -0.3]
-        assert np.percentile(span, 99) < 0.6, identity
+        span = np.ptp(hair[faces], axis=1)
+        assert np.percentile(span[facing < -0.3], 99) < 0.6, identity
+        # round the temples and the sides too (the whole head but the forehead, whose columns are dense): the
+        # largest span was 0.92-0.98 there with the 6 mm ramp, a staircase along the hairline at 45 and 90 degrees
+        assert span[facing < 0.8].max() < 0.5, identity
 
 
 @pytest.mark.parametrize("identity", ["default", "b"])

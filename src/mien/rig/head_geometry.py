@@ -742,7 +742,9 @@ def skin_masks(v: np.ndarray, m: np.ndarray, shape: HeadShape) -> dict[str, np.n
     # painted hair: above a hairline that drops from the forehead to the nape
     c = (v[:, 2] - Z_CENTRE) / np.maximum(np.hypot(v[:, 0], v[:, 2] - Z_CENTRE), 1e-9)
     line = np.where(c > 0, 0.024 + 0.044 * np.abs(c) ** 0.7, 0.024 + 0.085 * c)
-    soft = 0.006 + 0.006 * np.clip(-c, 0.0, 1.0)  # wider where the line drops steeply toward the nape
+    # the ramp widens where the line drops steeply across sparse columns: toward the nape, and round the temples
+    # and the sides, where a 6 mm ramp drew steps at 45 and 90 degrees (the forehead's hairline stays crisp)
+    soft = 0.006 + 0.006 * np.clip(-c, 0.0, 1.0) + 0.014 * (1.0 - c**4)
     hair = smoothstep(-soft, soft, v[:, 1] - line)
     return {"lips": lips, "brows": brows, "hair": hair}
 
