@@ -4,6 +4,7 @@ comparison with a human video) and write a citable HTML report."""
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 from typing import Any
 
@@ -197,6 +198,11 @@ def emotions_result(args: argparse.Namespace, heads: list[tuple[str, str]]) -> A
         detector.close()
 
 
+def _percent(value: float) -> str:
+    """``"97%"``, or ``"-"`` for a rate over nothing (nan)."""
+    return f"{value:.0%}" if math.isfinite(value) else "-"
+
+
 def run_emotions(args: argparse.Namespace) -> int:
     """``mien validate emotions``."""
     from mien.validate.recognition import EXPRESSIONS, write_recognition
@@ -208,17 +214,19 @@ def run_emotions(args: argparse.Namespace) -> int:
     basics = ("joy", "sadness", "anger", "surprise", "fear")
     print(f"recognised (top label; blends: top two) over {len(result.scores)} renders, and the FACS reading:")
     for name in ("neutral", *EXPRESSIONS):
-        facs = "" if name == "neutral" else f"   FACS reading {result.facs_rate(expression=name):4.0%}"
+        if not result.subset(expression=name):
+            continue  # not asked for
+        facs = "" if name == "neutral" else f"   FACS reading {_percent(result.facs_rate(expression=name)):>4s}"
         print(f"  {name:13s} {result.rate(expression=name):6.0%}   quality {result.quality(name):.2f}{facs}")
     frontal = result.rate(expression=basics, view=("frontal-1m", "frontal-3m"))
-    print(f"joy, sadness, anger, surprise, fear, frontal: {frontal:.0%}")
+    print(f"joy, sadness, anger, surprise, fear, frontal: {_percent(frontal)}")
     summary = result.framing_summary()
     if len(summary) > 1:
         print("the five (frontal / 45 degrees) and neutral, with the classifier's crop in each framing:")
         for framing, rates in summary.items():
             used = " (used above)" if framing == result.framing else ""
-            figures = " / ".join(f"{rates[k]:.0%}" for k in ("frontal", "oblique"))
-            print(f"  {framing + used:20s} {figures}, neutral {rates['neutral']:.0%}")
+            figures = " / ".join(_percent(rates[k]) for k in ("frontal", "oblique"))
+            print(f"  {framing + used:23s} {figures}, neutral {_percent(rates['neutral'])}")
     if result.subset(expression="disgust"):
         by_classifier = result.label_rate("angry", expression="disgust")
         by_facs = result.facs_rate("anger", expression="disgust")
