@@ -53,7 +53,8 @@ LIPS_PARTING: tuple[str, ...] = (
 """The targets that part the lips by themselves. Before the corners were closed, each opened the slit right to the
 corners, past where the vermilion ends, and an open mouth (anger, fear, surprise) showed dark wedges cutting into
 the skin at its corners, at 45 degrees most (docs/VALIDATION.md, fourteenth pass). ``mouthSmile`` keeps its open
-corners: a smile's corners open on the dark buccal corridor, and the built-in smiles at 1.2 read sad without it."""
+corners: a smile's corners open on the dark buccal corridor (closing them too turned three built-in smiles at 1.2
+sad)."""
 
 
 def _rot_x(p: np.ndarray, pivot: np.ndarray, angle: np.ndarray) -> np.ndarray:
