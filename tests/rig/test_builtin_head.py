@@ -305,6 +305,21 @@ def test_an_opening_mouth_ends_in_closed_corners(identity: str) -> None:
     assert np.linalg.norm(smile[upper[-2]] - smile[lower[-2]]) > 0.001
 
 
+def test_the_white_of_the_eye_is_shaded_toward_its_corners() -> None:
+    # the eyeball's side, which a 45-degree view shows at the outer corner, is a quarter as bright as the white
+    # beside the iris (it was 0.45 and read as a glowing wedge: docs/VALIDATION.md, fourteenth pass)
+    from mien.rig.head_geometry import EYE_L
+
+    mesh = builtin_head_mesh()
+    eye = mesh.part == EYE_L
+    centre = mesh.shape.eye_centers[0]
+    axis_angle = np.arccos(np.clip((mesh.vertices[eye, 2] - centre[2]) / mesh.shape.eye_radius_m, -1.0, 1.0))
+    level = np.abs(mesh.vertices[eye, 1] - centre[1]) < 0.003  # along the eye's horizontal, not under the lids
+    white = mesh.colors[eye][level & (axis_angle > 0.56) & (axis_angle < 0.6)].mean(axis=0)
+    side = mesh.colors[eye][level & (axis_angle > 1.0) & (axis_angle < 1.2)].mean(axis=0)
+    assert np.all(side < 0.3 * white)
+
+
 def test_hairline_is_drawn_without_steps() -> None:
     # per-vertex colour is interpolated across each triangle, so a triangle that spans the whole hair/skin ramp
     # draws a step; toward the nape and round the sides the hairline drops steeply across sparse columns and its

@@ -549,9 +549,11 @@ def build_head_mesh(shape: HeadShape) -> HeadMesh:
         ),
     )
     # Painted occlusion: the lids and the socket shade the white toward the corners, and the upper lid and
-    # lashes shade the top of the eye, so the white does not glow as bright wedges (a staring look).
-    toward_corner = smoothstep(0.55, 1.05, alpha)[:, None]
-    eye_col = eye_col * (1.0 - 0.55 * toward_corner) * (1.0 - 0.15 * toward_corner * np.array([0.0, 1.0, 1.0]))
+    # lashes shade the top of the eye, so the white does not glow as bright wedges (a staring look). At 45 degrees
+    # the near eye's outer corner shows the eyeball's side, 60 degrees off its axis: shaded to a quarter there
+    # (0.45 before the fourteenth pass, still a white wedge in the study's 45-degree view).
+    toward_corner = smoothstep(0.55, 1.0, alpha)[:, None]
+    eye_col = eye_col * (1.0 - 0.75 * toward_corner) * (1.0 - 0.15 * toward_corner * np.array([0.0, 1.0, 1.0]))
     eye_col = eye_col * (1.0 - 0.40 * smoothstep(0.05, 0.40, unit[:, 1]))[:, None]
     for part, c in ((EYE_L, centers[0]), (EYE_R, centers[1])):
         pts = c + unit * shape.eye_radius_m
