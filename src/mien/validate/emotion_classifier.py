@@ -141,6 +141,7 @@ class EmotionClassifier:
         total = float(probs.sum())
         return probs / total if total > 0 else probs
 
-    def classify(self, rgb: np.ndarray, landmarks: np.ndarray) -> np.ndarray:
-        """(7,) probabilities for the face around ``landmarks`` ((n, 2) pixels) on ``rgb`` ((h, w, 3) uint8)."""
-        return self.classify_crop(face_crop(rgb, landmarks, self.framing))
+    def classify(self, rgb: np.ndarray, landmarks: np.ndarray, framing: str | None = None) -> np.ndarray:
+        """(7,) probabilities for the face around ``landmarks`` ((n, 2) pixels) on ``rgb`` ((h, w, 3) uint8),
+        cropped in ``framing`` (default: this classifier's :attr:`framing`)."""
+        return self.classify_crop(face_crop(rgb, landmarks, self.framing if framing is None else framing))

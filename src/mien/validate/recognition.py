@@ -505,7 +505,7 @@ def run_recognition(
     from mien.progress import progress as progress_bar
     from mien.rig.heads import load_head
     from mien.validate.au_solve import AUSolver
-    from mien.validate.emotion_classifier import FRAMINGS, face_crop
+    from mien.validate.emotion_classifier import FRAMINGS
     from mien.validate.face_detector import FaceDetector
     from mien.validate.landmark_aus import LandmarkAUs
     from mien.validate.stimuli import StimulusRenderer
@@ -554,8 +554,8 @@ def run_recognition(
                     if classifier is not None and found.landmarks is not None:
                         for name in FRAMINGS:
                             if name != framing:
-                                crop = face_crop(rgb, found.landmarks, name)
-                                others[name] = tuple(float(p) for p in classifier.classify_crop(crop))
+                                probabilities = classifier.classify(rgb, found.landmarks, name)
+                                others[name] = tuple(float(p) for p in probabilities)
                     timings["detect"] += time.perf_counter() - started
                     emotions = found.emotions if found.emotions is not None else np.full(len(EMOTION_LABELS), np.nan)
                     aus: dict[str, float] = {}
