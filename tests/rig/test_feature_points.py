@@ -69,8 +69,9 @@ def test_anchor_sides_and_weights(head: tuple[Rig, FeaturePointRig]) -> None:
             j = FEATURE_NAMES.index(name.replace("Left", "Right"))
             assert p[j, 0] < -0.005 and abs(p[i, 0] + p[j, 0]) < 2e-3 and abs(p[i, 1] - p[j, 1]) < 2e-3, name
         w = fp.weights(name, rig.n_vertices)
-        # the smoothest field through the anchors overshoots a little beyond a held neighbour
-        assert w[fp.anchors[i]] == 1.0 and 1.0 <= w.max() < 1.05 and w.min() > -0.25
+        # the smoothest field through the anchors overshoots a little beyond a held neighbour (most at the lip
+        # points, whose meeting line is held at their share only up and down: 1.07 on the built-in b head)
+        assert w[fp.anchors[i]] == 1.0 and 1.0 <= w.max() < 1.08 and w.min() > -0.25
     y = dict(zip(FEATURE_NAMES, p[:, 1], strict=True))
     assert y["BrowInnerLeft"] > y["LidUpperLeft"] > y["LidLowerLeft"] > y["CheekLeft"] > y["Nostrils"]
     assert y["Nostrils"] > y["LipUpperLeft"] > y["LipLowerLeft"] > y["Jaw"]
@@ -197,8 +198,9 @@ def test_a_brow_moves_as_a_band(head: tuple[Rig, FeaturePointRig]) -> None:
             assert abs(d[rig.landmarks[middle]] - 0.5 * (a + b)) < 0.15 * (abs(a) + abs(b)), (emotion, middle)
 
 
-def test_band_place_runs_along_the_brow(head: tuple[Rig, FeaturePointRig]) -> None:
-    """A band's share goes from 0 at its first landmark (the inner brow) to 1 at its last, rising along the brow."""
+def test_band_place_runs_along_the_band(head: tuple[Rig, FeaturePointRig]) -> None:
+    """A band's place goes from 0 at its first landmark (the inner brow, a lip's left midpoint) to 1 at its last,
+    rising along it."""
     from mien.rig.feature_points import _band
 
     rig, _ = head
@@ -208,7 +210,7 @@ def test_band_place_runs_along_the_brow(head: tuple[Rig, FeaturePointRig]) -> No
         ids, along = _band(graph, np.asarray(rig.neutral, np.float64), landmarks, band)
         place = [float(along[np.flatnonzero(ids == landmarks[i])[0]]) for i in band.chain]
         assert place[0] == 0.0 and place[-1] == 1.0 and place == sorted(place), (band.name, place)
-        assert 0.3 < place[2] < 0.7, (band.name, place)
+        assert 0.3 < place[len(place) // 2] < 0.7, (band.name, place)
 
 
 def test_regions_respect_mouth_and_lids(head: tuple[Rig, FeaturePointRig]) -> None:

@@ -9,19 +9,20 @@ without hand rigging.
 **The deformation rule.** Each feature's field is the smoothest surface function (biharmonic,
 :mod:`mien.rig.harmonic`) that is 1 on the feature's plateau (the anchor and the skin within ``plateau_m``), holds
 every other feature's anchor (the skin within :data:`CORE_M`) at that feature's share (0, or the csv ``rides``
-share: the lower lip rides the jaw, the mouth corners half, the upper lip the nostrils' rise), each brow's strip
-of skin (``data/mpeg4_bands.csv``, within :data:`BAND_M` of its landmark chain) at the share of its two end features
-by its place along the brow (so a brow moves as a band, its middle never sagging toward the lid; the end features'
-regions reach from the whole strip) and every lid margin still (a lid feature moves its own margin with a
-raised-cosine falloff along it), and is 0 beyond a geodesic radius. So each anchor moves exactly by its own Table 1
-vector (plus its shares of the features it rides), the skin between anchors follows the smoothest interpolation of
-their moves (a lip keeps its curve; the glabella between two inner brows closing in is compressed evenly, not
-folded), and the mouth slit and eye openings are natural boundaries (the field couples only vertices joined by
-triangles). Off the face surface only the Jaw moves anything: it carries the lower teeth and tongue by the head's
-own jaw-opening target's shares (:data:`JAW_TARGET`), so an open mouth shows the teeth parted, not clenched behind
-the lips. The smoothest field overshoots a little beyond a held neighbour (at most about 0.2 of a feature's move,
-the other way). Summed per-feature falloffs (mien 0.1) put a kink wherever a region was capped or cut and bunched
-the skin between neighbouring anchors: creases, flaps, a bow-tie mouth.
+share: the lower lip rides the jaw, the mouth corners half, the upper lip the nostrils' rise), each band
+(``data/mpeg4_bands.csv``: a strip of skin within a few millimetres of a landmark chain) at the share of the
+features on it by its place along the chain (each brow between its two ends, so it moves as a band, its middle never
+sagging toward the lid; each lip's meeting line between its two lip points, held only up and down, so the lips part
+only where Table 1 parts them; a feature's region reaches from all of a strip it moves) and every lid margin still
+(a lid feature moves its own margin with a raised-cosine falloff along it), and is 0 beyond a geodesic radius. So
+each anchor moves exactly by its own Table 1 vector (plus its shares of the features it rides), the skin between
+anchors follows the smoothest interpolation of their moves (a lip keeps its curve; the glabella between two inner
+brows closing in is compressed evenly, not folded), and the mouth slit and eye openings are natural boundaries (the
+field couples only vertices joined by triangles). Off the face surface only the Jaw moves anything: it carries the
+lower teeth and tongue by the head's own jaw-opening target's shares (:data:`JAW_TARGET`), so an open mouth shows
+the teeth parted, not clenched behind the lips. The smoothest field overshoots a little beyond a held neighbour (at
+most about 0.2 of a feature's move, the other way). Summed per-feature falloffs (mien 0.1) put a kink wherever a
+region was capped or cut and bunched the skin between neighbouring anchors: creases, flaps, a bow-tie mouth.
 
 Each region is wide enough for its largest design move ``D`` (over the six emotions and four blends at
 :data:`DESIGN_INTENSITY`, after the limits below): ``R = P + SPREAD * D``, between the csv radius and
@@ -98,8 +99,6 @@ PLATEAU_SIDE_MARGIN_M = 0.006
 CORE_M = 0.003
 """Geodesic radius (m) of the patch around another feature's anchor that a feature's field holds at that
 feature's share (its own plateau, e.g. the jaw's whole chin, binds only its own field)."""
-BAND_M = 0.003
-"""Geodesic half-width (m) of a band (``data/mpeg4_bands.csv``): the skin held at its ends' shares, about a brow."""
 JAW_TARGET = "jawOpen"
 """The head's own target whose off-surface moves (lower teeth, tongue) the Jaw feature carries."""
 MIDLINE_LANDMARKS = (27, 28, 29, 30)
@@ -199,28 +198,50 @@ FEATURE_NAMES: tuple[str, ...] = tuple(spec.name for spec in feature_specs())
 
 @dataclass(frozen=True)
 class BandSpec:
-    """One row of ``data/mpeg4_bands.csv``: a strip of skin between two features that moves as a band."""
+    """One row of ``data/mpeg4_bands.csv``: a strip of skin that moves at the shares of the features on it."""
 
     name: str
     """Band name (``BrowLeft``...)."""
     mpeg4_fp: str
     """MPEG-4 feature points on it (``4.1 4.3 4.5``)."""
     chain: tuple[int, ...]
-    """0-based iBUG-68 landmarks along it, from the first end's feature to the last's."""
-    ends: tuple[str, str]
-    """The features at the chain's first and last landmark."""
+    """0-based iBUG-68 landmarks along it, from the first stop's landmark to the last's."""
+    stops: tuple[tuple[str, int], ...]
+    """The features whose shares the band takes, each with the chain landmark where its share is whole, in chain
+    order; the first sits on the chain's first landmark, the last on its last."""
+    half_width_m: float
+    """Geodesic half-width of the strip held about the chain, metres."""
+    axes: str
+    """The rig axes along which the strip is held (``"xyz"``; ``"y"``: only up and down, free to slide)."""
+
+    @property
+    def ends(self) -> tuple[str, ...]:
+        """The features of the band's stops."""
+        return tuple(feature for feature, _ in self.stops)
 
 
 @cache
 def band_specs() -> tuple[BandSpec, ...]:
-    """The bands from ``data/mpeg4_bands.csv`` (the two brows)."""
+    """The bands from ``data/mpeg4_bands.csv`` (the two brows, the lips' meeting lines)."""
     bands = []
     for row in _data_rows("mpeg4_bands.csv"):
-        first, last = row["ends"].split()
-        band = BandSpec(row["band"], row["mpeg4_fp"], _ints(row["chain"]), (first, last))
-        for feature in band.ends:
+        stops = []
+        for item in row["stops"].split():
+            feature, _, at = item.partition(":")
+            stops.append((feature, int(at)))
+        chain = _ints(row["chain"])
+        held = row["axes"].strip()
+        band = BandSpec(row["band"], row["mpeg4_fp"], chain, tuple(stops), float(row["half_width_m"]), held)
+        if not held or any(a not in AXES for a in held) or len(set(held)) != len(held) or list(held) != sorted(held):
+            raise InvalidValueError(f"axes of band {band.name}", held, "some of x, y, z in that order, e.g. xyz or y")
+        for feature, landmark in band.stops:
             if feature not in FEATURE_NAMES:
-                raise UnknownNameError(f"feature at an end of band {band.name}", feature, FEATURE_NAMES)
+                raise UnknownNameError(f"feature on band {band.name}", feature, FEATURE_NAMES)
+            if landmark not in chain:
+                raise InvalidValueError(f"landmark of {feature} on band {band.name}", landmark, f"one of {chain}")
+        places = [chain.index(landmark) for _, landmark in band.stops]
+        if places[0] != 0 or places[-1] != len(chain) - 1 or places != sorted(set(places)):
+            raise InvalidValueError(f"stops of band {band.name}", row["stops"], "stops in chain order, first to last")
         bands.append(band)
     return tuple(bands)
 
@@ -375,13 +396,59 @@ def _chain(graph: EdgeGraph, landmarks: np.ndarray, chain: tuple[int, ...]) -> n
 def _band(
     graph: EdgeGraph, neutral: np.ndarray, landmarks: np.ndarray, band: BandSpec
 ) -> tuple[np.ndarray, np.ndarray]:
-    """``(ids, along)``: the surface vertices within :data:`BAND_M` of ``band``'s landmark chain, and each one's
-    place along the chain (0 at its first landmark, 1 at its last), by the arc length of the nearest chain vertex."""
+    """``(ids, along)``: the surface vertices within ``band.half_width_m`` of ``band``'s landmark chain, and each
+    one's place along the chain (0 at its first landmark, 1 at its last), by the arc length of the nearest chain
+    vertex."""
     chain = _chain(graph, landmarks, band.chain)
     arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(neutral[chain], axis=0), axis=1))])
-    ids = np.flatnonzero(graph.distances(chain, limit_m=BAND_M) <= BAND_M)
+    ids = np.flatnonzero(graph.distances(chain, limit_m=band.half_width_m) <= band.half_width_m)
     nearest = np.argmin(np.linalg.norm(neutral[ids, None] - neutral[chain][None], axis=2), axis=1)
-    return ids, arc[nearest] / max(float(arc[-1]), 1e-9)
+    place = arc[nearest]
+    on_chain = np.isin(ids, chain)  # a chain vertex keeps its own place (a slit's two sides can coincide)
+    place[on_chain] = arc[[int(np.flatnonzero(chain == i)[-1]) for i in ids[on_chain]]]
+    return ids, place / max(float(arc[-1]), 1e-9)
+
+
+def _same_columns(mask: np.ndarray) -> list[list[int]]:
+    """Columns of the (n, k) ``mask`` grouped where they are equal, each group in ascending order."""
+    groups: list[list[int]] = []
+    for c in range(mask.shape[1]):
+        for group in groups:
+            if np.array_equal(mask[:, group[0]], mask[:, c]):
+                group.append(c)
+                break
+        else:
+            groups.append([c])
+    return groups
+
+
+def _stop_places(graph: EdgeGraph, neutral: np.ndarray, landmarks: np.ndarray, band: BandSpec) -> np.ndarray:
+    """(k,) place along ``band`` (as :func:`_band`'s ``along``) of each of its stops."""
+    chain = _chain(graph, landmarks, band.chain)
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(neutral[chain], axis=0), axis=1))])
+    index = [int(np.flatnonzero(chain == landmarks[landmark])[0]) for _, landmark in band.stops]
+    return arc[index] / max(float(arc[-1]), 1e-9)
+
+
+def band_shares(band: BandSpec, along: np.ndarray, places: np.ndarray, feature: FeatureSpec) -> np.ndarray:
+    """(k, 3) share of ``feature``'s move (rig x, y, z) at band places ``along``: each stop's own feature whole and
+    the features its anchor rides by their share, interpolated linearly between neighbouring stops.
+
+    >>> brow = band_specs()[0]
+    >>> inner = feature_specs()[FEATURE_NAMES.index("BrowInnerLeft")]
+    >>> band_shares(brow, np.array([0.0, 0.25, 1.0]), np.array([0.0, 1.0]), inner)[:, 1].tolist()
+    [1.0, 0.75, 0.0]
+    """
+    specs = {spec.name: spec for spec in feature_specs()}
+    out = np.zeros((len(along), 3))
+    for s, (stop, _) in enumerate(band.stops):
+        hat = np.zeros(len(places))
+        hat[s] = 1.0
+        weight = np.interp(along, places, hat)
+        rides = dict(specs[stop].rides)
+        share = np.ones(3) if stop == feature.name else np.asarray(rides.get(feature.name, (0.0, 0.0, 0.0)))
+        out += weight[:, None] * share[None, :]
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -432,6 +499,7 @@ class FeaturePointRig:
             point = neutral[landmarks[list(spec.landmarks)]].mean(axis=0)
             anchors.append(int(candidates[np.argmin(np.linalg.norm(neutral[candidates] - point, axis=1))]))
         bands = [_band(graph, neutral, landmarks, band) for band in band_specs()]
+        places = [_stop_places(graph, neutral, landmarks, band) for band in band_specs()]
         plateaus, cores, radius, plateau_m = [], [], np.zeros(len(specs)), np.zeros(len(specs))
         for f, spec in enumerate(specs):
             small = float(overrides.get(spec.name, spec.radius_m))
@@ -451,12 +519,17 @@ class FeaturePointRig:
         ids_out, weights_out = [], []
         for f, spec in enumerate(specs):
             dist = graph.distances([anchors[f]], limit_m=float(radius[f]))
-            for band, (ids, _) in zip(band_specs(), bands, strict=True):  # a band end's region reaches along it
-                if spec.name in band.ends:
-                    dist = np.minimum(dist, graph.distances(ids, limit_m=float(radius[f])) + plateau_m[f])
+            band_moves = [
+                band_shares(band, along, where, spec)
+                for band, (_, along), where in zip(band_specs(), bands, places, strict=True)
+            ]
+            for (ids, _), share in zip(bands, band_moves, strict=True):  # a region reaches along a band it moves
+                moved = ids[np.abs(share).max(axis=1) > 0.0]
+                if len(moved):
+                    dist = np.minimum(dist, graph.distances(moved, limit_m=float(radius[f])) + plateau_m[f])
             region = np.flatnonzero(dist < radius[f])
             values = np.zeros((rig.n_vertices, 3))
-            fixed = np.zeros(rig.n_vertices, bool)
+            fixed = np.zeros((rig.n_vertices, 3), bool)  # held, per vertex and rig axis
             for f_margin, chain in margins:
                 fixed[chain] = True
                 if f_margin == f:
@@ -466,18 +539,19 @@ class FeaturePointRig:
                 if g != f:  # the other anchors (their cores) hold still or ride this feature by their share
                     fixed[cores[g]] = True
                     values[cores[g]] = dict(other.rides).get(spec.name, (0.0, 0.0, 0.0))
-            for band, (ids, along) in zip(band_specs(), bands, strict=True):  # still, or this end's share
-                fixed[ids] = True
-                values[ids] = 0.0
-                if spec.name in band.ends:
-                    values[ids] = (along if band.ends[1] == spec.name else 1.0 - along)[:, None]
+            for band, (ids, _), share in zip(band_specs(), bands, band_moves, strict=True):  # still, or its share
+                cols = np.array([AXES.index(a) for a in band.axes])
+                fixed[np.ix_(ids, cols)] = True
+                values[np.ix_(ids, cols)] = share[:, cols]
             fixed[plateaus[f]] = True
             values[plateaus[f]] = 1.0
-            fixed_ids = np.flatnonzero(fixed)
-            field = system.fill(fixed_ids, values[fixed_ids], free=region)
+            field = np.zeros((rig.n_vertices, 3))
+            for group in _same_columns(fixed):  # one solve per distinct set of held vertices
+                held = np.flatnonzero(fixed[:, group[0]])
+                field[:, group] = system.fill(held, values[np.ix_(held, np.array(group))], free=region)
             outside = np.ones(rig.n_vertices, bool)
             outside[region] = False
-            field[(outside & ~fixed) | ~surface] = 0.0
+            field[(outside[:, None] & ~fixed) | ~surface[:, None]] = 0.0
             if spec.name == "Jaw":
                 carried, shares = _jaw_carried(rig, anchors[f], surface)
                 field[carried] = shares[:, None]
