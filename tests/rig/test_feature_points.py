@@ -382,6 +382,26 @@ def test_mesh_quality_measures() -> None:
     assert flipped_triangles(rig, mirrored).size > 0 and flipped_triangles(rig, stretched).size == 0
 
 
+def test_the_lower_lip_is_pulled_back_short_of_the_teeth(head: tuple[Rig, FeaturePointRig]) -> None:
+    """Table 1's disgust pulls the lower lip 4 mm back per unit of intensity, 9.6 mm at 2.4: on ICT through its lower
+    teeth and gum, which then showed through the skin below the lip as a dark red patch. The pull is limited to half
+    the lip's depth in front of the chin (iBUG 8, standing for the teeth); a forward move stays free."""
+    from mien.rig.driver import RigDriver
+    from mien.rig.feature_points import feature_rooms
+
+    rig, _ = head
+    rooms = feature_rooms(rig)
+    names = feature_target_names()
+    back = names.index("fp_LipLowerLeft_z")
+    depth = rig.neutral[rig.landmarks[[55, 56]], 2].mean() - rig.neutral[rig.landmarks[8], 2]
+    assert rooms[0, back] == pytest.approx(0.5 * depth, rel=1e-5) and np.isinf(rooms[1, back])
+    driver = RigDriver(rig)
+    disgust = np.array([[table1_weights(table1("disgust"), s)[n] for n in names] for s in (1.2, 2.4)])
+    moved = driver.weights(np.zeros((2, 62)), disgust)[:, driver.target_names.index("fp_LipLowerLeft_z")]
+    assert disgust[1, back] == pytest.approx(-0.0096)
+    assert -rooms[0, back] < moved[1] < moved[0] < 0.0 and disgust[1, back] < -rooms[0, back]
+
+
 def test_driver_limits_moves_toward_barriers_only(head: tuple[Rig, FeaturePointRig]) -> None:
     """Moves toward a barrier approach room x gap; moves away and free moves stay exact (2x intensity, 2x move)."""
     from mien.rig.driver import RigDriver

@@ -33,7 +33,7 @@ Each region is wide enough for its largest design move ``D`` (over the six emoti
 inner brows sit 12 mm from the midline and anger asks 31 mm inward at 2.4, so exact motion must fold. A move
 toward a barrier (an inner brow, a lip point or a mouth corner toward the facial midline, a mouth corner out
 toward the jaw line, a brow down onto its upper lid, a cheek up onto its lower lid, a lid onto the other lid,
-the upper lip up to the nostrils)
+the upper lip up to the nostrils, the lower lip back toward the teeth, whose depth the chin's front stands for)
 becomes ``L tanh(w / L)`` with ``L = room * gap``, ``gap`` the neutral distance from the feature's landmarks
 to the barrier along that axis and ``room`` from the csv (0.5; 0.4 for the lids, so two closing lids never
 meet). Small moves stay exact (slope 1 at 0), large ones approach ``L``. Moves away from a barrier and every
