@@ -546,7 +546,8 @@ class FeaturePointRig:
             fixed[plateaus[f]] = True
             values[plateaus[f]] = 1.0
             field = np.zeros((rig.n_vertices, 3))
-            for group in _same_columns(fixed):  # one solve per distinct set of held vertices
+            # one solve per distinct set of held vertices in the region (beyond it, held or not, a vertex stays 0)
+            for group in _same_columns(fixed[region]):
                 held = np.flatnonzero(fixed[:, group[0]])
                 field[:, group] = system.fill(held, values[np.ix_(held, np.array(group))], free=region)
             outside = np.ones(rig.n_vertices, bool)
