@@ -207,10 +207,12 @@ def test_band_place_runs_along_the_band(head: tuple[Rig, FeaturePointRig]) -> No
     graph = EdgeGraph.from_mesh(rig.neutral, rig.faces)
     landmarks = np.asarray(rig.landmarks, dtype=np.int64)
     for band in band_specs():
-        ids, along = _band(graph, np.asarray(rig.neutral, np.float64), landmarks, band)
+        ids, along, stops = _band(graph, np.asarray(rig.neutral, np.float64), landmarks, band)
         place = [float(along[np.flatnonzero(ids == landmarks[i])[0]]) for i in band.chain]
         assert place[0] == 0.0 and place[-1] == 1.0 and place == sorted(place), (band.name, place)
         assert 0.3 < place[len(place) // 2] < 0.7, (band.name, place)
+        # each stop sits where its landmark is
+        assert stops.tolist() == [place[band.chain.index(landmark)] for _, landmark in band.stops], band.name
 
 
 def test_regions_respect_mouth_and_lids(head: tuple[Rig, FeaturePointRig]) -> None:

@@ -76,6 +76,7 @@ __all__ = [
     "BandSpec",
     "FeaturePointRig",
     "FeatureSpec",
+    "band_shares",
     "band_specs",
     "eye_slide",
     "feature_rooms",
@@ -213,11 +214,6 @@ class BandSpec:
     """Geodesic half-width of the strip held about the chain, metres."""
     axes: str
     """The rig axes along which the strip is held (``"xyz"``; ``"y"``: only up and down, free to slide)."""
-
-    @property
-    def ends(self) -> tuple[str, ...]:
-        """The features of the band's stops."""
-        return tuple(feature for feature, _ in self.stops)
 
 
 @cache
@@ -395,18 +391,20 @@ def _chain(graph: EdgeGraph, landmarks: np.ndarray, chain: tuple[int, ...]) -> n
 
 def _band(
     graph: EdgeGraph, neutral: np.ndarray, landmarks: np.ndarray, band: BandSpec
-) -> tuple[np.ndarray, np.ndarray]:
-    """``(ids, along)``: the surface vertices within ``band.half_width_m`` of ``band``'s landmark chain, and each
-    one's place along the chain (0 at its first landmark, 1 at its last), by the arc length of the nearest chain
-    vertex."""
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(ids, along, stops)``: the surface vertices within ``band.half_width_m`` of ``band``'s landmark chain, each
+    one's place along the chain (0 at its first landmark, 1 at its last, by the arc length of the nearest chain
+    vertex) and the place of each of the band's stops."""
     chain = _chain(graph, landmarks, band.chain)
     arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(neutral[chain], axis=0), axis=1))])
+    arc /= max(float(arc[-1]), 1e-9)
     ids = np.flatnonzero(graph.distances(chain, limit_m=band.half_width_m) <= band.half_width_m)
     nearest = np.argmin(np.linalg.norm(neutral[ids, None] - neutral[chain][None], axis=2), axis=1)
-    place = arc[nearest]
+    along = arc[nearest]
     on_chain = np.isin(ids, chain)  # a chain vertex keeps its own place (a slit's two sides can coincide)
-    place[on_chain] = arc[[int(np.flatnonzero(chain == i)[-1]) for i in ids[on_chain]]]
-    return ids, place / max(float(arc[-1]), 1e-9)
+    along[on_chain] = arc[[int(np.flatnonzero(chain == i)[-1]) for i in ids[on_chain]]]
+    stops = arc[[int(np.flatnonzero(chain == landmarks[landmark])[0]) for _, landmark in band.stops]]
+    return ids, along, stops
 
 
 def _same_columns(mask: np.ndarray) -> list[list[int]]:
@@ -420,14 +418,6 @@ def _same_columns(mask: np.ndarray) -> list[list[int]]:
         else:
             groups.append([c])
     return groups
-
-
-def _stop_places(graph: EdgeGraph, neutral: np.ndarray, landmarks: np.ndarray, band: BandSpec) -> np.ndarray:
-    """(k,) place along ``band`` (as :func:`_band`'s ``along``) of each of its stops."""
-    chain = _chain(graph, landmarks, band.chain)
-    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(neutral[chain], axis=0), axis=1))])
-    index = [int(np.flatnonzero(chain == landmarks[landmark])[0]) for _, landmark in band.stops]
-    return arc[index] / max(float(arc[-1]), 1e-9)
 
 
 def band_shares(band: BandSpec, along: np.ndarray, places: np.ndarray, feature: FeatureSpec) -> np.ndarray:
@@ -498,8 +488,8 @@ class FeaturePointRig:
         for spec in specs:
             point = neutral[landmarks[list(spec.landmarks)]].mean(axis=0)
             anchors.append(int(candidates[np.argmin(np.linalg.norm(neutral[candidates] - point, axis=1))]))
-        bands = [_band(graph, neutral, landmarks, band) for band in band_specs()]
-        places = [_stop_places(graph, neutral, landmarks, band) for band in band_specs()]
+        specs_b = band_specs()
+        bands = [_band(graph, neutral, landmarks, band) for band in specs_b]
         plateaus, cores, radius, plateau_m = [], [], np.zeros(len(specs)), np.zeros(len(specs))
         for f, spec in enumerate(specs):
             small = float(overrides.get(spec.name, spec.radius_m))
@@ -520,10 +510,9 @@ class FeaturePointRig:
         for f, spec in enumerate(specs):
             dist = graph.distances([anchors[f]], limit_m=float(radius[f]))
             band_moves = [
-                band_shares(band, along, where, spec)
-                for band, (_, along), where in zip(band_specs(), bands, places, strict=True)
+                band_shares(band, along, stops, spec) for band, (_, along, stops) in zip(specs_b, bands, strict=True)
             ]
-            for (ids, _), share in zip(bands, band_moves, strict=True):  # a region reaches along a band it moves
+            for (ids, _, _), share in zip(bands, band_moves, strict=True):  # a region reaches along a band it moves
                 moved = ids[np.abs(share).max(axis=1) > 0.0]
                 if len(moved):
                     dist = np.minimum(dist, graph.distances(moved, limit_m=float(radius[f])) + plateau_m[f])
@@ -539,7 +528,7 @@ class FeaturePointRig:
                 if g != f:  # the other anchors (their cores) hold still or ride this feature by their share
                     fixed[cores[g]] = True
                     values[cores[g]] = dict(other.rides).get(spec.name, (0.0, 0.0, 0.0))
-            for band, (ids, _), share in zip(band_specs(), bands, band_moves, strict=True):  # still, or its share
+            for band, (ids, _, _), share in zip(specs_b, bands, band_moves, strict=True):  # still, or its share
                 cols = np.array([AXES.index(a) for a in band.axes])
                 fixed[np.ix_(ids, cols)] = True
                 values[np.ix_(ids, cols)] = share[:, cols]
