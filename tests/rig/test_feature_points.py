@@ -361,6 +361,26 @@ def test_edge_strain_within_the_heads_own_shapes(study_head: list[Rig]) -> None:
             assert max_edge_strain(rig, expression_vertices(full, driver, name, 2.4)) <= 2.0 * bound, (rig.name, name)
 
 
+def test_the_lips_part_only_where_table1_parts_them(study_head: list[Rig]) -> None:
+    """Sadness lowers both lips 1 mm and the corners 7 mm a unit: the lips stay closed (each lip's field sagged at
+    the meeting line and opened them 1.0-3.3 mm in the middle before it was held). Surprise's jaw and anger's raised
+    upper lip still part them."""
+
+    def opening_mm(rig: Rig, vertices: np.ndarray) -> float:
+        """How much further apart (mm) the inner lips' middles are than at rest, the most of three."""
+        lm, rest = np.asarray(rig.landmarks), np.asarray(rig.neutral, np.float64)
+        pairs = ((61, 67), (62, 66), (63, 65))
+        gaps = [(vertices[lm[u], 1] - vertices[lm[d], 1]) - (rest[lm[u], 1] - rest[lm[d], 1]) for u, d in pairs]
+        return 1000.0 * max(gaps)
+
+    for rig in study_head:
+        full, driver = driven(rig, FeaturePointRig.build(rig))
+        for intensity in (1.2, 2.4):
+            assert abs(opening_mm(rig, expression_vertices(full, driver, "sadness", intensity))) < 0.3, rig.name
+        assert opening_mm(rig, expression_vertices(full, driver, "surprise", 1.2)) > 10.0, rig.name
+        assert opening_mm(rig, expression_vertices(full, driver, "anger", 1.2)) > 2.0, rig.name
+
+
 def test_no_triangle_flips(study_head: list[Rig]) -> None:
     """No skin triangle turns over, the slivers the head's own jawOpen/mouthClose/eyeBlink fold excepted."""
     from mien.rig.mesh_quality import flipped_triangles, fragile_faces, region_faces
