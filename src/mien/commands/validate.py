@@ -206,6 +206,7 @@ def _percent(value: float) -> str:
 def run_emotions(args: argparse.Namespace) -> int:
     """``mien validate emotions``."""
     from mien.validate.recognition import EXPRESSIONS, write_recognition
+    from mien.validate.targets import check_targets, scorecard_lines
 
     heads = parse_heads(args.head)
     _check_heads(heads)
@@ -234,6 +235,8 @@ def run_emotions(args: argparse.Namespace) -> int:
         for basis, by_name in result.disgust_signs().items():
             signs = ", ".join(f"{name} AU9 {au['AU9']:.1f} AU10 {au['AU10']:.1f}" for name, au in by_name.items())
             print(f"  on the mesh's landmarks (0..5), {basis}: {signs}")
+    print("targets per head (mien.validate.targets; both bases, distances and intensities):")
+    print("\n".join(scorecard_lines(check_targets(result))))
     print(f"wrote {len(written)} files to {args.out} (recognition.json, sheet_*.png, confusion.png, quality.png)")
     return 0
 

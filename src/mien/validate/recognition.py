@@ -360,7 +360,10 @@ class RecognitionResult:
         return rows, matrix
 
     def to_json(self) -> dict[str, Any]:
-        """A JSON-ready summary: per-stimulus scores, rates, quality next to the human values, timings."""
+        """A JSON-ready summary: per-stimulus scores, rates, quality next to the human values, the targets per head
+        (:mod:`mien.validate.targets`), timings."""
+        from mien.validate.targets import check_targets
+
         rows, matrix = self.confusion()
         return {
             "detector": self.detector,
@@ -389,6 +392,10 @@ class RecognitionResult:
             "quality": {e: {"machine": self.quality(e), "human": HUMAN_QUALITY.get(e)} for e in EXPRESSIONS},
             "facs_reading": {e: self.facs_rate(expression=e) for e in EXPRESSIONS},
             "confusion": {"rows": rows, "matrix": matrix.tolist()},
+            "targets": [
+                {"head": c.head, "target": c.target.name, "rule": c.target.rule, "value": c.value, "met": c.met}
+                for c in check_targets(self)
+            ],
             "timings_s": self.timings_s,
         }
 

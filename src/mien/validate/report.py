@@ -125,6 +125,7 @@ def _emotions_section(result: Any, folder: Path) -> str:
         + "</li>",
         _framing_item(result),
         "</ul>",
+        _targets_table(result),
         _table(header, rows),
     ]
     for name in ("confusion.png", "quality.png"):
@@ -134,6 +135,23 @@ def _emotions_section(result: Any, folder: Path) -> str:
     for sheet in sorted(folder.glob("sheet_*.png")):
         lines.append(f"<h4>{html.escape(sheet.stem.removeprefix('sheet_'))}</h4>{_img(sheet, sheet.stem)}")
     return "\n".join(lines)
+
+
+def _targets_table(result: Any) -> str:
+    """The targets (:mod:`mien.validate.targets`) per head and identity, each figure marked met or missed."""
+    from mien.validate.targets import check_targets
+
+    checks = check_targets(result)
+    heads = list(dict.fromkeys(c.head for c in checks))
+    marks = {True: " &#10003;", False: " <b>&#10007;</b>", None: ""}
+    rows = [
+        [html.escape(target), html.escape(next(c.target.rule for c in checks if c.target.name == target))]
+        + [_pct(c.value) + marks[c.met] for h in heads for c in checks if c.head == h and c.target.name == target]
+        for target in dict.fromkeys(c.target.name for c in checks)
+    ]
+    return "<h3>Targets per head (&#10003; met, &#10007; missed; both bases, distances and intensities)</h3>" + _table(
+        ["target", "rule", *heads], rows
+    )
 
 
 def _framing_item(result: Any) -> str:
