@@ -8,7 +8,7 @@ import numpy as np
 
 from mien.validate.detector import EMOTION_LABELS
 from mien.validate.recognition import RecognitionResult, Stimulus, StimulusScore
-from mien.validate.targets import TARGETS, check_targets, scorecard_lines
+from mien.validate.targets import TARGETS, TargetCheck, check_targets, scorecard_lines, wilson_interval
 
 
 def _score(
@@ -50,15 +50,31 @@ def test_targets_are_checked_per_head_and_over_all_heads() -> None:
 
 def test_scorecard_names_what_each_head_misses() -> None:
     lines = scorecard_lines(check_targets(_result()))
-    assert [line.split()[0] for line in lines] == ["builtin:a", "ict:a", "all"]
-    ict, builtin = lines[1], lines[0]
+    heads = [line.split()[0] for line in lines if not line.startswith("    ")]
+    assert heads == ["builtin:a", "ict:a", "all"]
+    text = "\n".join(lines)
+    builtin, ict = text.split("ict:a")[0], text.split("ict:a")[1].split("all")[0]
     assert "meets 3 of 3" in ict and "misses" not in ict
-    assert "meets 0 of 3" in builtin
-    assert "frontal joy 80% (>= 90%)" in builtin and "disgust read as anger (FACS reading) 20% (<= 10%)" in builtin
+    assert "meets 0 of 3; misses:" in builtin
+    # 8 of 10 against 90%: the 95% interval (49-94%) reaches the bound, so the miss is within noise
+    assert "frontal joy 80% (8 of 10; 95% interval 49-94%; >= 90%), within noise" in builtin
+    assert "disgust read as anger (FACS reading) 20% (2 of 10; 95% interval 6-51%; <= 10%), within noise" in builtin
+
+
+def test_a_miss_is_decided_once_enough_renders_agree() -> None:
+    joy = TARGETS[0]
+    assert TargetCheck("x", joy, 35, 80).decided and not TargetCheck("x", joy, 35, 80).met
+    assert TargetCheck("x", joy, 80, 80).decided and TargetCheck("x", joy, 80, 80).met
+    assert not TargetCheck("x", joy, 7, 8).decided
+    low, high = wilson_interval(35, 80)
+    assert 0.33 < low < 0.34 and 0.54 < high < 0.56
+    assert wilson_interval(0, 0) != wilson_interval(0, 0)  # nan: nothing judged
 
 
 def test_recognition_json_carries_the_targets() -> None:
     data = json.loads(json.dumps(_result().to_json(), default=float))
     rows = {(row["head"], row["target"]): row for row in data["targets"]}
     assert len(rows) == 3 * len(TARGETS)
-    assert rows[("builtin:a", "frontal joy")]["met"] is False and rows[("builtin:a", "frontal joy")]["rule"] == ">= 90%"
+    joy = rows[("builtin:a", "frontal joy")]
+    assert joy["met"] is False and joy["rule"] == ">= 90%" and (joy["hits"], joy["n"]) == (8, 10)
+    assert joy["decided"] is False and 0.49 < joy["interval95"][0] < 0.5

@@ -393,7 +393,17 @@ class RecognitionResult:
             "facs_reading": {e: self.facs_rate(expression=e) for e in EXPRESSIONS},
             "confusion": {"rows": rows, "matrix": matrix.tolist()},
             "targets": [
-                {"head": c.head, "target": c.target.name, "rule": c.target.rule, "value": c.value, "met": c.met}
+                {
+                    "head": c.head,
+                    "target": c.target.name,
+                    "rule": c.target.rule,
+                    "hits": c.hits,
+                    "n": c.n,
+                    "value": c.value,
+                    "interval95": list(c.interval),
+                    "met": c.met,
+                    "decided": c.decided,
+                }
                 for c in check_targets(self)
             ],
             "timings_s": self.timings_s,

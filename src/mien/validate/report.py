@@ -138,19 +138,31 @@ def _emotions_section(result: Any, folder: Path) -> str:
 
 
 def _targets_table(result: Any) -> str:
-    """The targets (:mod:`mien.validate.targets`) per head and identity, each figure marked met or missed."""
+    """The targets (:mod:`mien.validate.targets`) per head and identity: each figure met or missed, with the
+    renders judged and its 95% interval."""
     from mien.validate.targets import check_targets
 
     checks = check_targets(result)
     heads = list(dict.fromkeys(c.head for c in checks))
     marks = {True: " &#10003;", False: " <b>&#10007;</b>", None: ""}
+
+    def cell(check: Any) -> str:
+        if check.met is None:
+            return _pct(check.value)
+        low, high = check.interval
+        noise = "" if check.decided else ", within noise"
+        spread = f"{check.n} renders; {_pct(low)}-{_pct(high)}{noise}"
+        return f"{_pct(check.value)}{marks[check.met]} <small>({spread})</small>"
+
     rows = [
         [html.escape(target), html.escape(next(c.target.rule for c in checks if c.target.name == target))]
-        + [_pct(c.value) + marks[c.met] for h in heads for c in checks if c.head == h and c.target.name == target]
+        + [cell(c) for h in heads for c in checks if c.head == h and c.target.name == target]
         for target in dict.fromkeys(c.target.name for c in checks)
     ]
-    return "<h3>Targets per head (&#10003; met, &#10007; missed; both bases, distances and intensities)</h3>" + _table(
-        ["target", "rule", *heads], rows
+    return (
+        "<h3>Targets per head</h3><p>&#10003; met, &#10007; missed, over both bases, distances and intensities; in "
+        "brackets the renders judged and the share's 95% Wilson interval (within noise: the interval reaches the "
+        "bound, too few renders to tell).</p>" + _table(["target", "rule", *heads], rows)
     )
 
 
