@@ -424,6 +424,27 @@ def test_the_lower_lip_is_pulled_back_short_of_the_teeth(head: tuple[Rig, Featur
     assert -rooms[0, back] < moved[1] < moved[0] < 0.0 and disgust[1, back] < -rooms[0, back]
 
 
+def test_the_nose_keeps_its_shape_as_the_nostrils_rise(study_head: list[Rig]) -> None:
+    """Table 1's disgust lifts the nostrils 8 mm per unit of intensity, 19.2 mm at 2.4: the built-in head's whole nose
+    tip went up 14.5 mm with them and its underside turned into a flat shelf. The rise is limited to a fifth of the
+    way to the nose's root (iBUG 27): the tip rises less than 7 mm at 2.4, and the nostril wings still rise at least
+    5 mm at 1.2 (the nose wrinkle that tells disgust from anger, mien.validate.landmark_aus)."""
+    from mien.rig.feature_points import feature_rooms
+
+    up = feature_target_names().index("fp_Nostrils_y")
+    for rig in study_head:
+        gap = rig.neutral[rig.landmarks[27], 1] - rig.neutral[rig.landmarks[[31, 35]], 1].mean()
+        assert feature_rooms(rig)[1, up] == pytest.approx(0.2 * gap, rel=1e-5)
+        full, driver = driven(rig, FeaturePointRig.build(rig))
+        rise = {
+            s: (expression_vertices(full, driver, "disgust", s)[: rig.n_vertices] - rig.neutral)[rig.landmarks, 1]
+            for s in (1.2, 2.4)
+        }
+        assert rise[2.4][30] < 0.007, rig.name  # the built-in tip: 14.5 mm before the limit
+        assert rise[1.2][[31, 35]].min() > 0.005, rig.name
+        assert rise[2.4][[31, 35]].min() > rise[1.2][[31, 35]].min(), rig.name
+
+
 def test_driver_limits_moves_toward_barriers_only(head: tuple[Rig, FeaturePointRig]) -> None:
     """Moves toward a barrier approach room x gap; moves away and free moves stay exact (2x intensity, 2x move)."""
     from mien.rig.driver import RigDriver
