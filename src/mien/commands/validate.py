@@ -235,7 +235,7 @@ def run_emotions(args: argparse.Namespace) -> int:
         for basis, by_name in result.disgust_signs().items():
             signs = ", ".join(f"{name} AU9 {au['AU9']:.1f} AU10 {au['AU10']:.1f}" for name, au in by_name.items())
             print(f"  on the mesh's landmarks (0..5), {basis}: {signs}")
-    print("targets per head (mien.validate.targets; both bases, distances and intensities):")
+    print("targets per head (mien.validate.targets), over the renders of this run:")
     print("\n".join(scorecard_lines(check_targets(result))))
     print(f"wrote {len(written)} files to {args.out} (recognition.json, sheet_*.png, confusion.png, quality.png)")
     return 0

@@ -160,7 +160,7 @@ def _targets_table(result: Any) -> str:
         for target in dict.fromkeys(c.target.name for c in checks)
     ]
     return (
-        "<h3>Targets per head</h3><p>&#10003; met, &#10007; missed, over both bases, distances and intensities; in "
+        "<h3>Targets per head</h3><p>&#10003; met, &#10007; missed, over the renders of this report; in "
         "brackets the renders judged and the share's 95% Wilson interval (within noise: the interval reaches the "
         "bound, too few renders to tell).</p>" + _table(["target", "rule", *heads], rows)
     )
