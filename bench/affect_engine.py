@@ -17,7 +17,7 @@ import numpy as np
 
 from mien.affect.basis import expression, feature_point_basis
 from mien.affect.engine import EmotionEngine
-from mien.affect.envelope import envelope_value, envelope_values
+from mien.facs.envelope import envelope_value, envelope_values
 
 FRAMES = 20_000
 REPEATS = 7

@@ -46,7 +46,7 @@ def main() -> None:
     from dtaidistance import dtw as dtai_dtw
     from dtaidistance import dtw_ndim
 
-    from mien.laughter.dtw import dtw_distance_matrices_per_channel, dtw_distance_matrix
+    from mien.learning.dtw import dtw_distance_matrices_per_channel, dtw_distance_matrix
 
     rng = np.random.default_rng(2021)
     data = np.cumsum(rng.normal(size=(args.series, args.frames, args.channels)), axis=1)

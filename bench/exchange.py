@@ -63,9 +63,9 @@ def main() -> None:
     args = parser.parse_args()
 
     from mien.exchange import glb
-    from mien.exchange.face_weights import clip_to_rig
     from mien.exchange.key_reduction import reduce_keys
-    from mien.rig.arkit import ARKIT_NAMES
+    from mien.facs.arkit import ARKIT_NAMES
+    from mien.rig.face_weights import clip_to_rig
     from mien.rig.heads import load_head
 
     rig = load_head("default")

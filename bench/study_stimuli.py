@@ -43,9 +43,9 @@ REPEATS = 3
 
 def baseline_render_clip(design, out: Path) -> float:  # type: ignore[no-untyped-def]
     """Seconds to render every stimulus with one render_clip call each (a new renderer per clip)."""
-    from mien.animate import face_to_rig
     from mien.render.camera import camera_from_options
     from mien.render.clip_render import render_clip
+    from mien.rig.animate import face_to_rig
     from mien.study.stimuli import _face_clip, _Scenes
 
     scenes = _Scenes(design.size)

@@ -12,17 +12,16 @@ dependencies are imported only when used (``pip install 'mien[all]'``).
 
 from mien.affect.emotions import BLENDS, EMOTIONS, Blend, define_blend
 from mien.affect.engine import EmotionEngine
-from mien.affect.envelope import Envelope
 from mien.character import Character, CharacterBatch
 from mien.errors import InvalidValueError, MienError, MissingAssetError, MissingExtraError, UnknownNameError
 from mien.facs.catalogue import ACTION_UNITS, FACE_CHANNELS, OPENFACS_AUS, ActionUnit
 from mien.facs.clip import Clip
 from mien.facs.dynamics import FacsEngine, time_constant_from_speed
+from mien.facs.envelope import Envelope
 from mien.facs.idle import Idle, IdleSettings
 from mien.facs.intensity import AUSpec, parse_au
 from mien.facs.prototypes import EMFACS_PROTOTYPES
-
-__version__ = "0.1.0"
+from mien.version import __version__
 
 __all__ = [
     "ACTION_UNITS",

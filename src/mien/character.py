@@ -34,11 +34,11 @@ import numpy as np
 from mien.affect.basis import facs_basis, feature_point_basis, saturate
 from mien.affect.emotions import Blend, blend_components, check_intensity
 from mien.affect.engine import EmotionBatch
-from mien.affect.envelope import Envelope
 from mien.errors import InvalidValueError
 from mien.facs.catalogue import FACE_CHANNELS, POSE_CHANNELS
 from mien.facs.clip import Clip
 from mien.facs.dynamics import FacsBatch, RowIndex, TimedAction
+from mien.facs.envelope import Envelope
 from mien.facs.idle import IdleBatch, IdleSettings
 from mien.facs.intensity import AUSpec
 from mien.small_matmul import matmul_rows

@@ -9,10 +9,10 @@ import sys
 from collections.abc import Sequence
 from typing import NoReturn
 
-from mien import __version__
 from mien.commands import COMMAND_MODULES
 from mien.commands._checks import PENDING_OUTPUTS, prepare_outputs
 from mien.errors import MienError
+from mien.version import __version__
 
 __all__ = ["UsageError", "build_parser", "main"]
 

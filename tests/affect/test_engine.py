@@ -10,9 +10,9 @@ import pytest
 from mien.affect.basis import expression, facs_basis, feature_point_basis, feature_target_names
 from mien.affect.emotions import EMOTIONS, define_blend, emotion_vector, remove_blend
 from mien.affect.engine import EmotionEngine, mood_step, shown_mood
-from mien.affect.envelope import Envelope, envelope_values
 from mien.affect.pad import PAD_PROTOTYPES, pad_to_emotions
 from mien.errors import InvalidValueError, UnknownNameError
+from mien.facs.envelope import Envelope, envelope_values
 
 JOY, SAD, ANGER, SURPRISE = (EMOTIONS.index(e) for e in ("joy", "sadness", "anger", "surprise"))
 

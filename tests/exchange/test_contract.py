@@ -11,9 +11,9 @@ import pytest
 from mien.errors import InvalidValueError, UnknownNameError
 from mien.exchange import FORMATS, format_for, format_module, read_clip, reader_for, writer_for
 from mien.exchange.key_reduction import default_tolerance
+from mien.facs.arkit import ARKIT_NAMES
 from mien.facs.catalogue import FACE_CHANNELS
 from mien.facs.clip import Clip
-from mien.rig.arkit import ARKIT_NAMES
 
 
 def face_clip(n_frames: int = 40, fps: float = 30.0) -> Clip:

@@ -15,9 +15,9 @@ import pytest
 
 from mien.errors import InvalidValueError
 from mien.exchange import glb
+from mien.facs.arkit import ARKIT_NAMES
 from mien.facs.catalogue import FACE_CHANNELS
 from mien.facs.clip import Clip
-from mien.rig.arkit import ARKIT_NAMES
 from mien.rig.builtin_head import builtin_head
 
 REPO = Path(__file__).resolve().parents[2]

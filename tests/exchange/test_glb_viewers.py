@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 from mien.exchange import glb
+from mien.facs.arkit import ARKIT_NAMES
 from mien.facs.clip import Clip
-from mien.rig.arkit import ARKIT_NAMES
 from mien.rig.builtin_head import builtin_head
 
 REPO = Path(__file__).resolve().parents[2]

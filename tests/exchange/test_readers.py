@@ -11,9 +11,9 @@ import pytest
 
 from mien.errors import InvalidValueError, MissingAssetError
 from mien.exchange import arkit_csv, clip_json, curves_csv, glb, openface_csv, openfacs_jsonl, read_clip
+from mien.facs.arkit import ARKIT_NAMES
 from mien.facs.catalogue import au_channels
 from mien.facs.clip import Clip
-from mien.rig.arkit import ARKIT_NAMES
 from mien.rig.model import MorphTarget, Rig
 
 DATA = Path(__file__).parent / "data"
@@ -122,7 +122,7 @@ def test_live_link_from_the_app_with_a_60_fps_timecode(tmp_path: Path) -> None:
     clip = read_clip(path)
     assert clip.n_frames == 70 and clip.fps == pytest.approx(60.0, rel=0.02)
     assert clip.channel("jawOpen")[-1] == pytest.approx(1.0)
-    from mien.exchange.face_weights import weights_to_au
+    from mien.rig.face_weights import weights_to_au
 
     au = weights_to_au(clip)
     assert max(au.channel("AU26")[-1], au.channel("AU27")[-1]) > 1.0  # jaw drop read back as an AU

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from mien.errors import InvalidValueError, UnknownNameError
+from mien.facs.arkit import ARKIT_INDEX, ARKIT_NAMES
 from mien.facs.clip import Clip
 from mien.laughter.controllers import (
     CONTROLLER_GAIN,
@@ -16,11 +17,10 @@ from mien.laughter.controllers import (
     controller_matrix,
     controllers,
     controllers_from_points,
-    controllers_from_track,
     controllers_to_arkit,
 )
 from mien.laughter.names import CONTROLLER_NAMES
-from mien.rig.arkit import ARKIT_INDEX, ARKIT_NAMES
+from mien.learning.takes import controllers_from_track
 
 
 def _neutral_face() -> np.ndarray:

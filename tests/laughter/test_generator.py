@@ -10,10 +10,10 @@ from scipy.signal import find_peaks
 
 from mien.errors import InvalidValueError, UnknownNameError
 from mien.facs.catalogue import FACE_CHANNELS
-from mien.laughter.dtw import dtw_distance_matrix
 from mien.laughter.generator import MOUTH_CHANNELS, LaughResult, face_frame_at, generate
 from mien.laughter.names import CONTROLLER_NAMES, LAUGH_TYPES
 from mien.laughter.taxonomy import TAXONOMY
+from mien.learning.dtw import dtw_distance_matrix
 
 LAUGHS = [t for t, r in TAXONOMY.items() if r.pulses]
 

@@ -4,7 +4,7 @@ The issue asks that "the learned curves of two takes of the same expression are 
 of different expressions". The shared data holds one real face video (a person breaking into a smile), so the
 other takes are rendered by mien itself on the ICT-FaceKit head (MediaPipe needs a realistic face) and then go
 through the same path as a real video: MediaPipe tracking -> iBUG-68 points -> the paper's 16 controller
-curves (:func:`mien.laughter.controllers.controllers_from_track`) -> :func:`mien.laughter.dtw`.
+curves (:func:`mien.learning.takes.controllers_from_track`) -> :func:`mien.learning.dtw`.
 
 Takes (2.4 s at 30 fps, 72 frames like the real video; neutral first, as the controllers' neutral reference
 is the first 5 frames):
@@ -69,7 +69,7 @@ SCRIPTS = {
 
 
 def _take(video: Path, landmarker: Path) -> Take:
-    from mien.laughter.controllers import controllers_from_track
+    from mien.learning.takes import controllers_from_track
     from mien.tracking.track import track_video
 
     track = track_video(video, landmarker, use_cache=False, show_progress=False)
@@ -81,13 +81,13 @@ def _take(video: Path, landmarker: Path) -> Take:
 @pytest.fixture(scope="session")
 def rendered_takes(ict_dir: Path, landmarker_path: Path, tmp_path_factory: pytest.TempPathFactory) -> dict[str, Take]:
     """The four rendered takes, rendered and tracked once per session (a few seconds in all)."""
-    from mien.affect.envelope import Envelope
-    from mien.animate import face_to_rig
     from mien.character import Character
     from mien.errors import MissingExtraError
+    from mien.facs.envelope import Envelope
     from mien.render.camera import CAMERA_PRESETS
     from mien.render.clip_render import render_clip
     from mien.render.offscreen import EGLUnavailableError
+    from mien.rig.animate import face_to_rig
     from mien.rig.heads import load_head
 
     folder = tmp_path_factory.mktemp("takes")
@@ -125,7 +125,7 @@ def _distances(takes: dict[str, Take]) -> dict[tuple[str, str], float]:
     and a smile-only comparison would hand the smile-vs-rest answer to the test (surprise and sadness differ
     from a smile mostly in the brows and jaw).
     """
-    from mien.laughter.dtw import dtw_distance_matrix
+    from mien.learning.dtw import dtw_distance_matrix
 
     names = list(takes)
     matrix = dtw_distance_matrix([takes[name].curves.values for name in names])

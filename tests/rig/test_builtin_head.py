@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from mien.errors import InvalidValueError, UnknownNameError
-from mien.rig.arkit import ARKIT_NAMES
+from mien.facs.arkit import ARKIT_NAMES
 from mien.rig.builtin_head import BUILTIN_IDENTITIES, builtin_head, builtin_head_mesh
 from mien.rig.head_geometry import build_head_mesh
 from mien.rig.model import Rig

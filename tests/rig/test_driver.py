@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 
 from mien.affect.basis import feature_target_names
-from mien.animate import face_to_rig
 from mien.character import CharacterBatch
 from mien.errors import InvalidValueError
+from mien.facs.arkit import ARKIT_NAMES
 from mien.facs.catalogue import FACE_CHANNELS, POSE_CHANNELS
 from mien.facs.clip import Clip
-from mien.rig.arkit import ARKIT_NAMES
+from mien.rig.animate import face_to_rig
 from mien.rig.driver import POSE_COLUMNS, RigDriver
 from mien.rig.mapping import AUMapping
 from mien.rig.model import MorphTarget, Rig

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from mien.errors import InvalidValueError, MissingAssetError
-from mien.rig.arkit import ARKIT_NAMES
+from mien.facs.arkit import ARKIT_NAMES
 from mien.rig.ict_facekit import (
     ICT_EXTRA_TARGETS,
     ICT_TARGET_GAINS,

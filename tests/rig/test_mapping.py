@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from mien.errors import InvalidValueError, UnknownNameError
+from mien.facs.arkit import ARKIT_NAMES
 from mien.facs.catalogue import FACE_CHANNELS, OPENFACS_AUS, POSE_CHANNELS, au_channels, channel_index
-from mien.rig.arkit import ARKIT_NAMES
 from mien.rig.deform import Deformer
 from mien.rig.ict_facekit import load_ict_facekit
 from mien.rig.mapping import AUMapping

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from mien.errors import InvalidValueError
-from mien.rig.arkit import ARKIT_INDEX
+from mien.facs.arkit import ARKIT_INDEX
 from mien.tracking.landmarker import FrameResult, Landmarker, head_pose_deg
 
 

@@ -12,7 +12,7 @@ import pytest
 
 import mien.tracking.track as track_module
 from mien.errors import InvalidValueError
-from mien.rig.arkit import ARKIT_INDEX
+from mien.facs.arkit import ARKIT_INDEX
 from mien.tracking.track import Track, apply_gaps, fill_gaps, load_track, track_video
 
 

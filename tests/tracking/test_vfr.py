@@ -123,14 +123,14 @@ def test_a_variable_rate_copy_of_a_real_video_keeps_its_timing(
     assert variable.duration_s == pytest.approx(original.duration_s, abs=0.07)
 
     def onset_s(track: Track) -> float:
-        from mien.rig.arkit import ARKIT_INDEX
+        from mien.facs.arkit import ARKIT_INDEX
 
         columns = [ARKIT_INDEX["mouthSmileLeft"], ARKIT_INDEX["mouthSmileRight"]]
         smile = track.blendshapes[:, columns].mean(axis=1)
         return float(track.timestamps_s[int(np.argmax(smile > 0.4))])
 
     assert onset_s(variable) == pytest.approx(onset_s(original), abs=0.1)  # 3 frames at the sparse rate
-    from mien.laughter.controllers import controllers_from_track
+    from mien.learning.takes import controllers_from_track
 
     (curves,) = controllers_from_track(variable)
     assert curves.fps == pytest.approx(variable.fps)

@@ -110,7 +110,7 @@ def test_face_on_too_few_frames_says_the_share(shared_data: Path, landmarker_pat
 
 
 def test_expression_longer_than_the_video(single_face: Path) -> None:
-    from mien.affect.envelope import Envelope
+    from mien.facs.envelope import Envelope
 
     with pytest.raises(InvalidValueError, match=r"at least as long as the expression \(4.00 s\); it lasts 2.40 s"):
         run_compare(single_face, "joy", head="builtin", envelope=Envelope(2.0, 1.0, 1.0), progress=False)

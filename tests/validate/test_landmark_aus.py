@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mien.animate import face_to_rig
 from mien.facs.catalogue import FACE_CHANNELS
+from mien.rig.animate import face_to_rig
 from mien.rig.deform import Deformer
 from mien.rig.heads import load_head
 from mien.rig.mapping import AUMapping

@@ -29,8 +29,11 @@ __all__ = [
     "EMOTIONS",
     "EMOTION_ALIASES",
     "MAX_INTENSITY",
+    "RECOGNISED_FIVE",
+    "STUDY_EXPRESSIONS",
     "Blend",
     "blend_components",
+    "blend_emotions",
     "check_intensity",
     "define_blend",
     "emotion_index",
@@ -145,6 +148,22 @@ BLENDS: dict[str, Blend] = {
 """The paper's blends by name (read-only by convention; add your own with :func:`define_blend`)."""
 
 _USER_BLENDS: dict[str, Blend] = {}
+
+STUDY_EXPRESSIONS: tuple[str, ...] = EMOTIONS + tuple(BLENDS)
+"""The ten expressions of the Broekens study: the six basic emotions, then the four blends (SPEC section 3)."""
+
+RECOGNISED_FIVE: tuple[str, ...] = tuple(name for name in EMOTIONS if name != "disgust")
+"""The five basic emotions held to the recognition targets: the classifier reads disgust unreliably (it is
+judged by the FACS reading instead, SPEC section 6)."""
+
+
+def blend_emotions(name: str) -> tuple[str, ...]:
+    """The basic emotions of the blend ``name`` (the paper's or a user's), in the blend's order.
+
+    >>> blend_emotions("furious")
+    ('anger', 'surprise')
+    """
+    return tuple(emotion for emotion, _ in get_blend(name).components)
 
 
 def known_names() -> tuple[str, ...]:

@@ -36,10 +36,10 @@ import math
 import numpy as np
 
 from mien.affect.emotions import EMOTIONS, MAX_INTENSITY, Blend, blend_components, check_intensity
-from mien.affect.envelope import Envelope, envelope_values
 from mien.affect.pad import PAD_PROTOTYPES, PAD_RADIUS, check_pad, pad_intensities
 from mien.errors import InvalidValueError
 from mien.facs.dynamics import RowIndex
+from mien.facs.envelope import Envelope, envelope_values
 
 __all__ = ["MODES", "EmotionBatch", "EmotionEngine", "mood_step", "shown_mood"]
 

@@ -55,8 +55,8 @@ def demo_clip(
     intensity: float, fps: float, seed: int, basis: str
 ) -> tuple[Clip, np.ndarray | None, list[tuple[float, str]]]:
     """(face clip, feature weights or None, [(peak time s, label)]) of the demo sequence."""
-    from mien.affect.envelope import Envelope
     from mien.character import Character
+    from mien.facs.envelope import Envelope
 
     character = Character(seed=seed, expression_basis=basis)
     envelope = Envelope(onset_s=0.4, hold_s=0.8, decay_s=0.5)  # 1.7 s: the paper's 1-2 s advice for real use
@@ -71,7 +71,6 @@ def demo_clip(
 
 def run(args: argparse.Namespace) -> int:
 
-    from mien.animate import face_to_rig
     from mien.exchange.curves_csv import write as write_csv
     from mien.facs.catalogue import FACE_CHANNELS
     from mien.plot import plot_clip
@@ -79,6 +78,7 @@ def run(args: argparse.Namespace) -> int:
     from mien.render.clip_render import iter_frames, make_renderer
     from mien.render.contact_sheet import contact_sheet
     from mien.render.video import Mp4Writer, write_png
+    from mien.rig.animate import face_to_rig
 
     out: Path = args.out
     # curves, plus per-frame rig weights and poses (frames themselves are streamed, one at a time)

@@ -29,9 +29,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from mien.affect.emotions import resolve_emotion
-    from mien.affect.envelope import Envelope
     from mien.character import Character
     from mien.facs.catalogue import FACE_CHANNELS
+    from mien.facs.envelope import Envelope
 
     name = resolve_emotion(args.emotion)
     check_curve_request(args.duration, args.fps, len(FACE_CHANNELS))

@@ -33,8 +33,8 @@ def run(args: argparse.Namespace) -> int:
     from mien.commands._checks import refuse_option
     from mien.errors import InvalidValueError
     from mien.exchange import reader_for, writer_for
+    from mien.facs.arkit import ARKIT_NAMES
     from mien.facs.catalogue import FACE_CHANNELS
-    from mien.rig.arkit import ARKIT_NAMES
 
     if args.output.suffix.lower() not in CLIP_SUFFIXES:
         raise InvalidValueError("output", str(args.output), "a mien clip path ending in .npz or .json")
@@ -48,7 +48,7 @@ def run(args: argparse.Namespace) -> int:
     if args.au:
         if not any(c in ARKIT_NAMES for c in clip.channels):
             refuse_option("--au", True, f"{args.input.name} holds AU channels already, not ARKit weights")
-        from mien.exchange.face_weights import weights_to_au
+        from mien.rig.face_weights import weights_to_au
 
         clip = weights_to_au(clip)
     writer_for(args.output)(clip, args.output)

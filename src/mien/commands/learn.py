@@ -41,7 +41,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 def run(args: argparse.Namespace) -> int:
     """Handle ``mien learn``; returns the exit code."""
     from mien.commands._checks import check_scheduler
-    from mien.laughter.learn import learn_library
+    from mien.learning.learn import learn_library
 
     if args.scheduler is not None:
         if args.workers is not None:

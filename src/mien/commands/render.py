@@ -90,7 +90,7 @@ def _face_clip(args: argparse.Namespace) -> tuple[Clip, np.ndarray | None, int]:
         peak_s = 0.2 + 0.4 + 0.5 * max(0.1, args.duration - 1.2)
     else:
         from mien.affect.emotions import resolve_emotion
-        from mien.affect.envelope import Envelope
+        from mien.facs.envelope import Envelope
 
         hold = max(0.3, args.duration - 1.5)
         character.emote(resolve_emotion(" ".join(args.what)), args.intensity, 0.2, Envelope(0.4, hold, 0.5))
@@ -133,14 +133,14 @@ def _laugh_clip(args: argparse.Namespace, laugh: str) -> tuple[Clip, np.ndarray 
 
 
 def run(args: argparse.Namespace) -> int:
-    from mien.exchange.face_weights import clip_to_rig
     from mien.render.clip_render import render_clip, render_still
     from mien.render.video import write_png
+    from mien.rig.face_weights import clip_to_rig
 
     clip, features, peak = _face_clip(args)
     rig, camera, size = scene_from_args(args)
     if features is not None:
-        from mien.animate import face_to_rig
+        from mien.rig.animate import face_to_rig
 
         weights, poses = face_to_rig(rig, clip, features)
     else:  # face channels through the AU mapping, or the head's own target names (ARKit weights) as they are

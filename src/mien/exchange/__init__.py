@@ -146,7 +146,7 @@ def _sniffing_reader(suffix: str) -> Callable[..., Any]:
     def read(source: Any) -> Any:
         import io
 
-        from mien.exchange.streams import read_bytes, source_name
+        from mien.fileio.streams import read_bytes, source_name
 
         if isinstance(source, (str, os.PathLike)):
             return reader_for(source)(source)

@@ -14,7 +14,7 @@ known names are skipped with a warning that lists them. The timecode rate is the
 50, 60 above the last frame number before a change of the seconds field (60, the app's default, when the
 seconds never change);
 the clip's frame rate is estimated from the time stamps, and the rows are resampled onto that uniform grid.
-The result is a weight clip (ARKit names, 0..1); :func:`mien.exchange.face_weights.weights_to_au` turns it into
+The result is a weight clip (ARKit names, 0..1); :func:`mien.rig.face_weights.weights_to_au` turns it into
 AU intensities (``mien import --au``).
 
 Writing: an ARKit weight clip (or a face-channel clip, through the AU mapping on the built-in ARKit
@@ -31,11 +31,11 @@ import numpy as np
 
 from mien.errors import InvalidValueError
 from mien.exchange.csv_table import check_increasing, columns_from_text
-from mien.exchange.streams import Source, TargetT, read_text, refuse_rig, source_name, write_text
 from mien.exchange.timing import uniform_clip
+from mien.facs.arkit import ARKIT_NAMES
 from mien.facs.catalogue import POSE_CHANNELS
 from mien.facs.clip import Clip
-from mien.rig.arkit import ARKIT_NAMES
+from mien.fileio.streams import Source, TargetT, read_text, refuse_rig, source_name, write_text
 
 __all__ = ["COLUMNS", "ROTATION_COLUMNS", "SUFFIXES", "format_timecode", "parse_timecode", "read", "sniff", "write"]
 
@@ -174,7 +174,7 @@ def write(clip: Clip, target: TargetT, rig: object = None) -> TargetT:
     ``clip``: ARKit names (weights 0..1) and optional pose channels (degrees), or face channels, which go
     through the AU -> ARKit mapping. Missing ARKit channels are written as 0.
     """
-    from mien.exchange.face_weights import clip_to_rig, is_weight_clip
+    from mien.rig.face_weights import clip_to_rig, is_weight_clip
 
     refuse_rig(rig, "Live Link Face .csv")
     if is_weight_clip(clip, ARKIT_NAMES):

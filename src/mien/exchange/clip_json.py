@@ -5,8 +5,8 @@ from __future__ import annotations
 import json
 
 from mien.errors import InvalidValueError
-from mien.exchange.streams import Source, TargetT, read_text, refuse_rig, source_name, write_text
 from mien.facs.clip import Clip
+from mien.fileio.streams import Source, TargetT, read_text, refuse_rig, source_name, write_text
 
 __all__ = ["SUFFIXES", "read", "write"]
 

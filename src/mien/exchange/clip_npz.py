@@ -1,4 +1,4 @@
-"""Clips as NumPy ``.npz``: a :mod:`~mien.exchange.container` of kind ``mien-clip`` (array ``values``
+"""Clips as NumPy ``.npz``: a :mod:`~mien.fileio.container` of kind ``mien-clip`` (array ``values``
 (frames, channels) float64; metadata ``fps`` and ``channels``).
 
 Files from before the container (arrays ``values``, ``fps`` and ``channels``, no metadata) still read.
@@ -11,9 +11,9 @@ from typing import Any
 import numpy as np
 
 from mien.errors import InvalidValueError
-from mien.exchange.container import load_container, save_container
-from mien.exchange.streams import Source, TargetT, refuse_rig, source_name
 from mien.facs.clip import Clip
+from mien.fileio.container import load_container, save_container
+from mien.fileio.streams import Source, TargetT, refuse_rig, source_name
 
 __all__ = ["FORMAT_NAME", "FORMAT_VERSION", "SUFFIXES", "read", "write"]
 

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mien.errors import InvalidValueError
-from mien.exchange.streams import Source, read_text, source_name
+from mien.fileio.streams import Source, read_text, source_name
 
 __all__ = ["CsvColumns", "check_increasing", "columns_from_text", "read_columns"]
 

@@ -13,8 +13,8 @@ import io
 import numpy as np
 
 from mien.exchange.csv_table import check_increasing, read_columns
-from mien.exchange.streams import Source, TargetT, refuse_rig, write_text
 from mien.facs.clip import Clip
+from mien.fileio.streams import Source, TargetT, refuse_rig, write_text
 
 __all__ = ["SUFFIXES", "read", "sniff", "write"]
 

@@ -21,7 +21,7 @@ whole mesh turns with the head, also vertices outside the rig's ``head`` region.
 
 The reader returns the animation as a weight clip: one channel per target name (weights 0..1) and the head
 pose channels when the file rotates a node, resampled to a uniform frame rate estimated from the key times.
-:func:`mien.exchange.face_weights.weights_to_au` turns ARKit weights into AU intensities.
+:func:`mien.rig.face_weights.weights_to_au` turns ARKit weights into AU intensities.
 """
 
 from __future__ import annotations
@@ -35,10 +35,10 @@ from typing import Any
 import numpy as np
 
 from mien.errors import InvalidValueError
-from mien.exchange.streams import Source, TargetT, read_bytes, source_name, write_bytes
 from mien.exchange.timing import uniform_clip
 from mien.facs.catalogue import POSE_CHANNELS
 from mien.facs.clip import Clip
+from mien.fileio.streams import Source, TargetT, read_bytes, source_name, write_bytes
 from mien.rig.model import Rig
 
 __all__ = ["SUFFIXES", "head_glb_bytes", "read", "write"]
@@ -314,9 +314,9 @@ def write(clip: Clip, target: TargetT, rig: Rig | None = None) -> TargetT:
     """Write ``rig`` (default: :func:`mien.rig.heads.load_head`) animated by ``clip`` as GLB to ``target``.
 
     ``clip``: face channels (AU intensities, pose degrees) or the rig's target names (weights 0..1) plus
-    optional pose channels (see :func:`mien.exchange.face_weights.clip_to_rig`). Returns ``target``.
+    optional pose channels (see :func:`mien.rig.face_weights.clip_to_rig`). Returns ``target``.
     """
-    from mien.exchange.face_weights import clip_to_rig
+    from mien.rig.face_weights import clip_to_rig
 
     if rig is None:
         from mien.rig.heads import load_head

@@ -32,9 +32,9 @@ import numpy as np
 
 from mien.errors import InvalidValueError
 from mien.exchange.key_reduction import default_tolerance, reduce_keys
-from mien.exchange.streams import Source, TargetT, read_bytes, refuse_rig, source_name, write_text
 from mien.exchange.timing import resample
 from mien.facs.clip import Clip
+from mien.fileio.streams import Source, TargetT, read_bytes, refuse_rig, source_name, write_text
 
 __all__ = [
     "MAYA_FPS_UNITS",

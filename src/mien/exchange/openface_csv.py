@@ -28,10 +28,10 @@ import numpy as np
 
 from mien.errors import InvalidValueError
 from mien.exchange.csv_table import check_increasing, columns_from_text
-from mien.exchange.streams import Source, read_text, source_name
 from mien.exchange.timing import uniform_clip
 from mien.facs.catalogue import FACE_AU_CODES, FACE_CHANNELS, au_channels
 from mien.facs.clip import Clip
+from mien.fileio.streams import Source, read_text, source_name
 
 __all__ = ["PRESENCE_INTENSITY", "SUFFIXES", "read", "sniff"]
 

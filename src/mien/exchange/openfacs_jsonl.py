@@ -27,10 +27,10 @@ from typing import Any
 import numpy as np
 
 from mien.errors import InvalidValueError
-from mien.exchange.streams import Source, TargetT, read_text, refuse_rig, source_name, write_text
 from mien.exchange.timing import uniform_clip
 from mien.facs.catalogue import FACE_AU_CODES, FACE_CHANNELS, OPENFACS_AUS, POSE_CHANNELS, au_channels
 from mien.facs.clip import Clip
+from mien.fileio.streams import Source, TargetT, read_text, refuse_rig, source_name, write_text
 
 __all__ = ["SUFFIXES", "TIME_KEY", "read", "write"]
 

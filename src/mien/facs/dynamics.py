@@ -1,7 +1,7 @@
 """Time-based AU dynamics: held targets approached exponentially, and timed onset/apex/offset actions.
 
 Timed actions share the linear onset/hold/offset envelope of the emotion engine
-(:func:`mien.affect.envelope.envelope_values`). :class:`FacsBatch` holds the layer of n characters (one
+(:func:`mien.facs.envelope.envelope_values`). :class:`FacsBatch` holds the layer of n characters (one
 row each); :class:`FacsEngine`, one character, is a batch of one, so both run the same code.
 
 OpenFACS moves every morph a fraction ``Speed`` (0..1) of the way to its target on each tick, so its motion
@@ -19,9 +19,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mien.affect.envelope import envelope_values
 from mien.errors import InvalidValueError
 from mien.facs.catalogue import ACTION_UNITS, FACE_CHANNELS, POSE_CHANNELS, au_channels
+from mien.facs.envelope import envelope_values
 from mien.facs.intensity import AUSpec, check_intensity, parse_au
 
 RowIndex = int | slice | np.ndarray | list[int]

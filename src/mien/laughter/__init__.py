@@ -1,1 +1,2 @@
-"""Laughter and smiles (Mascaró et al. 2021): taxonomy, facial parameters, controllers, DTW, library, generator."""
+"""Laughter and smiles at run time (Mascaró et al. 2021): taxonomy, facial parameters, controllers, library,
+generator. Learning libraries from video lives in :mod:`mien.learning`."""

@@ -31,11 +31,11 @@ import csv
 from dataclasses import dataclass
 from functools import cache
 from importlib import resources
-from typing import Any
 
 import numpy as np
 
 from mien.errors import InvalidValueError, UnknownNameError
+from mien.facs.arkit import ARKIT_INDEX, ARKIT_NAMES
 from mien.facs.clip import Clip
 from mien.laughter.facial_parameters import (
     FP_NAMES,
@@ -45,7 +45,6 @@ from mien.laughter.facial_parameters import (
     neutral_reference,
 )
 from mien.laughter.names import CONTROLLER_NAMES
-from mien.rig.arkit import ARKIT_INDEX, ARKIT_NAMES
 
 __all__ = [
     "CONTROLLER_GAIN",
@@ -55,7 +54,6 @@ __all__ = [
     "controller_matrix",
     "controllers",
     "controllers_from_points",
-    "controllers_from_track",
     "controllers_to_arkit",
 ]
 
@@ -107,23 +105,6 @@ def controllers_from_points(
 ) -> Clip:
     """Controller curves from (n, 68, 2|3) iBUG-68 points (any units), normalised by the neutral face size."""
     return controllers(facial_parameters(points68, neutral=neutral), fps, eps, neutral)
-
-
-def controllers_from_track(track: Any, eps: float = DEFAULT_EPS, neutral: Neutral = None) -> list[Clip]:
-    """One controller :class:`Clip` per take of a :class:`mien.tracking.Track` (2-D pixel landmarks).
-
-    Each take has its own neutral reference (by default its first NEUTRAL_FRAMES frames; a frame index
-    counts from the take's start). An empty list when the track has no take.
-    """
-    from mien.tracking.ibug68 import ibug68
-    from mien.tracking.track import resample_on_times
-
-    points = ibug68(track.landmarks_px[..., :2])
-    clips = []
-    for start, stop in track.takes:  # on a regular grid at track.fps, interpolated on the frames' real times
-        regular = resample_on_times(track.timestamps_s[start:stop], points[start:stop], track.fps)
-        clips.append(controllers_from_points(regular, track.fps, eps, neutral))
-    return clips
 
 
 @dataclass(frozen=True)

@@ -4,7 +4,7 @@ Each parameter is the distance between two landmarks (``data/fp_landmarks.csv``)
 inter-ocular distance between the outer eye corners (iBUG 36 and 45) measured on the neutral reference, so
 parameters are in "inter-ocular distances" and do not depend on the video's resolution or on how far the face
 is from the camera. Distances use every coordinate given: pass (n, 68, 2) pixel points for the paper's 2-D
-distances (what :func:`mien.laughter.controllers.controllers_from_track` does).
+distances (what :func:`mien.learning.takes.controllers_from_track` does).
 
 The neutral reference ``FP0`` is, by default, the mean of the first :data:`NEUTRAL_FRAMES` frames (5, about
 0.17 s at 30 fps: the paper's performers start from a neutral face), or one chosen frame, or values given as

@@ -1,10 +1,10 @@
 """The laugh library: one representative controller curve per laugh/smile type, and its file format.
 
-A library is what the learning pipeline (:mod:`mien.laughter.learn`) produces from video and what the
+A library is what the learning pipeline (:mod:`mien.learning.learn`) produces from video and what the
 generator (:mod:`mien.laughter.generator`) plays back; the built-in one
 (:func:`mien.laughter.builtin_library.default_library`) has the same form.
 
-File format (``.npz``, version 1; a :mod:`mien.exchange.container`, written atomically): one ``float64`` array
+File format (``.npz``, version 1; a :mod:`mien.fileio.container`, written atomically): one ``float64`` array
 ``curve/<type>`` of shape ``(n_frames, 16)`` per type (columns in :data:`~mien.laughter.names.CONTROLLER_NAMES`
 order), and ``meta``, a 0-d string array holding JSON: ``{"format": "mien-laugh-library", "version": 1,
 "source", "eps", "fps", "n_takes", "created", "method", "extra", "types", "channels"}``. Loading never unpickles
@@ -121,7 +121,7 @@ class LaughLibrary:
             **self.metadata.to_dict(),
         }
         arrays: dict[str, np.ndarray] = {f"curve/{name}": clip.values for name, clip in self.curves.items()}
-        from mien.exchange.container import save_container
+        from mien.fileio.container import save_container
 
         save_container(path, FORMAT_NAME, FORMAT_VERSION, meta, arrays)  # atomic: temporary file, then rename
         return path
@@ -147,7 +147,7 @@ def load_library(path: str | Path) -> LaughLibrary:
     path = Path(path)
     if not path.is_file():
         raise InvalidValueError("library", str(path), "an existing .npz library file")
-    from mien.exchange.container import load_container
+    from mien.fileio.container import load_container
 
     box = load_container(path)  # corrupt, truncated or foreign files raise naming the file
     meta = box.meta

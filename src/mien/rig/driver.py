@@ -3,7 +3,7 @@
 :class:`RigDriver` parses the AU -> blendshape table once (:class:`~mien.rig.mapping.AUMapping`, reordered to
 the rig's targets) into one float32 matrix. A tick is a product in row chunks that BLAS keeps on the calling
 thread (:func:`mien.small_matmul.matmul_rows`: a busy machine's threads cannot slow it down) and a clip, into
-buffers kept between calls (nothing allocated once the batch size is stable). :func:`mien.animate.face_to_rig`
+buffers kept between calls (nothing allocated once the batch size is stable). :func:`mien.rig.animate.face_to_rig`
 uses it, so offline rendering and live streaming share one implementation.
 
 >>> import numpy as np

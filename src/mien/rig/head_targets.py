@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mien.rig.arkit import ARKIT_NAMES
+from mien.facs.arkit import ARKIT_NAMES
 from mien.rig.head_geometry import (
     CAVITY,
     EYE_L,

@@ -39,9 +39,9 @@ from pathlib import Path
 import numpy as np
 
 from mien.errors import InvalidValueError, MissingAssetError
+from mien.facs.arkit import ARKIT_NAMES
 from mien.paths import cache_dir, require_asset
 from mien.progress import progress
-from mien.rig.arkit import ARKIT_NAMES
 from mien.rig.model import MorphTarget, Rig
 from mien.rig.obj import read_obj, read_obj_vertices
 from mien.rig.polygon import inside_polygon
@@ -72,7 +72,7 @@ SPARSE_TOLERANCE_M = 1e-5
 
 _CACHE_VERSION = "ict-1"
 _CACHE_FORMAT = "mien-ict-cache"
-"""Container kind of the parsed-model cache (:mod:`mien.exchange.container`; written atomically)."""
+"""Container kind of the parsed-model cache (:mod:`mien.fileio.container`; written atomically)."""
 _CACHE_FORMAT_VERSION = 1
 
 ICT_PARTS: dict[str, tuple[int, int]] = {
@@ -369,7 +369,7 @@ def load_ict_facekit(
     arrays: dict[str, np.ndarray] | None = None
     cache_file = ict_cache_file(folder) if cache else None
     if cache_file is not None and cache_file.is_file():
-        from mien.exchange.container import load_container
+        from mien.fileio.container import load_container
 
         try:
             arrays = load_container(cache_file, _CACHE_FORMAT, _CACHE_FORMAT_VERSION).arrays
@@ -378,7 +378,7 @@ def load_ict_facekit(
     if arrays is None:
         arrays = _parse(model)
         if cache_file is not None:
-            from mien.exchange.container import save_container
+            from mien.fileio.container import save_container
 
             save_container(cache_file, _CACHE_FORMAT, _CACHE_FORMAT_VERSION, {"model": str(model)}, arrays, False)
     return _build(arrays, coeffs, "ict-facekit")

@@ -30,8 +30,8 @@ from pathlib import Path
 import numpy as np
 
 from mien.errors import InvalidValueError, UnknownNameError
+from mien.facs.arkit import ARKIT_NAMES
 from mien.facs.catalogue import FACE_CHANNELS, POSE_CHANNELS
-from mien.rig.arkit import ARKIT_NAMES
 from mien.rig.model import Rig
 
 __all__ = ["INTENSITY_E", "AUMapping"]

@@ -142,7 +142,7 @@ def _moving(names: tuple[str, ...]) -> np.ndarray:
 
 def _peak(path: Path, detector: Detector, sample_s: float) -> tuple[float, Any]:
     """``(time_s, detection)`` of the frame that moved most from the first sampled one."""
-    from mien.rig.arkit import ARKIT_NAMES
+    from mien.facs.arkit import ARKIT_NAMES
     from mien.tracking.video import iter_frames
 
     mask = _moving(tuple(ARKIT_NAMES))

@@ -251,7 +251,7 @@ def _machine_section(analysis: StudyAnalysis, machine: MachineJudgement | str | 
 
 
 def _provenance(analysis: StudyAnalysis, machine: MachineJudgement | str | None) -> dict[str, Any]:
-    from mien import __version__
+    from mien.version import __version__
 
     info: dict[str, Any] = {
         "mien": __version__,

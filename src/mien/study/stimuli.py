@@ -176,9 +176,9 @@ def _face_clip(design: Design, spec: StimulusSpec) -> tuple[Any, np.ndarray | No
 
 
 def _render(design: Design, spec: StimulusSpec, scenes: _Scenes, video: Path) -> tuple[float, float]:
-    from mien.animate import face_to_rig
     from mien.render.clip_render import iter_frames
     from mien.render.video import Mp4Writer
+    from mien.rig.animate import face_to_rig
 
     conditions = spec.conditions
     head = str(conditions.get("head", "default"))

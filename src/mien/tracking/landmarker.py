@@ -6,7 +6,7 @@ on real images (tests/tracking/test_landmarker.py):
 - MediaPipe gives 51 of the 52 ARKit names (no ``tongueOut``, left at 0) plus ``_neutral`` (dropped).
 - MediaPipe's blendshape ``Left``/``Right`` are the subject's own sides, like ARKit's and mien's: covering the
   eye on the picture's right (the subject's left) raises ``eyeBlinkLeft``. Scores are therefore reordered to
-  :data:`~mien.rig.arkit.ARKIT_NAMES` by name, without swapping sides.
+  :data:`~mien.facs.arkit.ARKIT_NAMES` by name, without swapping sides.
 - The facial transformation matrix maps MediaPipe's canonical face model into camera space. The canonical
   model's axes are mien's rig axes (+x the subject's left, +y up, +z out of the face) and camera space has +x
   to the picture's right, +y up, +z toward the viewer, so a frontal face gives the identity rotation.
@@ -24,8 +24,8 @@ from typing import Any, Literal
 import numpy as np
 
 from mien.errors import InvalidValueError, MissingExtraError
+from mien.facs.arkit import ARKIT_INDEX, ARKIT_NAMES
 from mien.paths import require_asset
-from mien.rig.arkit import ARKIT_INDEX, ARKIT_NAMES
 
 __all__ = ["MIN_CONFIDENCE", "NOT_ESTIMATED", "N_LANDMARKS", "FrameResult", "Landmarker", "head_pose_deg"]
 
@@ -46,7 +46,7 @@ class FrameResult:
     """(478, 3) float32 normalised coordinates: x / width, y / height, z in the same scale as x (smaller is
     nearer the camera), origin at the picture's top-left."""
     blendshapes: np.ndarray
-    """(52,) float32 scores 0..1 in :data:`~mien.rig.arkit.ARKIT_NAMES` order (the subject's sides)."""
+    """(52,) float32 scores 0..1 in :data:`~mien.facs.arkit.ARKIT_NAMES` order (the subject's sides)."""
     matrix: np.ndarray
     """(4, 4) float64 facial transformation matrix (canonical face model -> camera space, centimetres)."""
 

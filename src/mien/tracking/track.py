@@ -29,10 +29,10 @@ from typing import Any
 import numpy as np
 
 from mien.errors import InvalidValueError
+from mien.facs.arkit import ARKIT_NAMES
 from mien.facs.clip import resample_on_times
 from mien.paths import cache_dir, require_asset
 from mien.progress import progress
-from mien.rig.arkit import ARKIT_NAMES
 from mien.tracking.landmarker import MIN_CONFIDENCE, N_LANDMARKS, head_pose_deg
 from mien.tracking.video import VideoInfo, probe
 
@@ -54,7 +54,7 @@ TRACKER_VERSION = 1
 """Bumped whenever per-frame tracking output changes, so old cache entries are not reused."""
 
 TRACK_FORMAT = "mien-track"
-"""Container kind of a ``.npz`` track file (:mod:`mien.exchange.container`)."""
+"""Container kind of a ``.npz`` track file (:mod:`mien.fileio.container`)."""
 
 TRACK_FORMAT_VERSION = 1
 """Track file version written (and the newest read; files from before the container read as version 0)."""
@@ -162,11 +162,11 @@ class Track:
         }
 
     def save(self, path: str | os.PathLike[str]) -> Path:
-        """Write to ``.npz`` (a :mod:`mien.exchange.container` of kind ``mien-track``, written atomically) or
+        """Write to ``.npz`` (a :mod:`mien.fileio.container` of kind ``mien-track``, written atomically) or
         ``.json`` (NaN as null); returns the path."""
         out = Path(path)
         if out.suffix == ".npz":
-            from mien.exchange.container import save_container
+            from mien.fileio.container import save_container
 
             save_container(out, TRACK_FORMAT, TRACK_FORMAT_VERSION, self.meta(), self.arrays())
         elif out.suffix == ".json":
@@ -192,7 +192,7 @@ def load_track(path: str | os.PathLike[str]) -> Track:
     file = Path(path)
     try:
         if file.suffix == ".npz":
-            from mien.exchange.container import load_container
+            from mien.fileio.container import load_container
 
             box = load_container(file, TRACK_FORMAT, TRACK_FORMAT_VERSION)
             meta, arrays = box.meta, box.arrays

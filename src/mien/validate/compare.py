@@ -1,7 +1,7 @@
 """OpenFACS's synthetic-expert validation: a human video against the character, as AU activation maps.
 
 A "synthetic expert" (MediaPipe Face Landmarker's 52 blendshape scores, turned into FACS AU intensities by
-:class:`~mien.validate.au_solve.AUSolver`) watches the human video and the character's renderings; each
+:class:`~mien.rig.au_solve.AUSolver`) watches the human video and the character's renderings; each
 becomes an activation map (AU x time, :mod:`mien.validate.activation`) and the maps are compared by their
 2D correlation coefficient (Cuculo & D'Amelio 2019, section 5 and Fig. 5).
 
@@ -361,7 +361,7 @@ def run_compare(
     head / identity: see :func:`mien.rig.heads.load_head`. camera: a preset of
     :data:`mien.render.camera.CAMERA_PRESETS`. size: render (width, height) pixels. length: time samples
     per map. intensity: the expression's intensity (1 = the prototype). envelope: the expression's
-    :class:`~mien.affect.envelope.Envelope` (default Broekens' 0.4/0.3/0.3 s stretched to the video's
+    :class:`~mien.facs.envelope.Envelope` (default Broekens' 0.4/0.3/0.3 s stretched to the video's
     duration; a longer one than the video is an error). aus: AU numbers (map rows; default the 18 OpenFACS
     AUs). detector: run over the renders (default MediaPipe in image mode). landmarker: the
     ``face_landmarker.task`` path (default the configured asset).
@@ -370,15 +370,15 @@ def run_compare(
     on too few frames or is too short, :class:`MissingAssetError` for a missing model or head asset, and
     :class:`UnknownNameError` for an unknown head, identity, camera or expression.
     """
-    from mien.affect.envelope import Envelope
     from mien.character import Character
     from mien.facs.catalogue import FACE_CHANNELS
     from mien.facs.clip import Clip
+    from mien.facs.envelope import Envelope
     from mien.paths import require_asset
     from mien.render.camera import camera_from_options
+    from mien.rig.au_solve import SOLVED_AUS, AUSolver
     from mien.rig.heads import load_head
     from mien.tracking import track_video
-    from mien.validate.au_solve import SOLVED_AUS, AUSolver
     from mien.validate.stimuli import StimulusRenderer
 
     started = time.perf_counter()

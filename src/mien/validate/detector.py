@@ -32,7 +32,7 @@ class Detection:
     landmarks: np.ndarray | None = None
     """(n, 2) float32 pixel coordinates (x right, y down) of the face landmarks, or None."""
     blendshapes: np.ndarray | None = None
-    """(52,) float32 ARKit blendshape scores 0..1 in :data:`~mien.rig.arkit.ARKIT_NAMES` order, or None."""
+    """(52,) float32 ARKit blendshape scores 0..1 in :data:`~mien.facs.arkit.ARKIT_NAMES` order, or None."""
     emotions: np.ndarray | None = None
     """(7,) float32 probabilities over :data:`EMOTION_LABELS` (sum 1), or None."""
     head_pose_deg: np.ndarray | None = None

@@ -1,6 +1,6 @@
 """AU estimates from the rendered mesh's landmarks, for the AUs the detector cannot see.
 
-The detector's AUs come from its blendshapes (:mod:`mien.validate.au_solve`), and MediaPipe's ``noseSneer``
+The detector's AUs come from its blendshapes (:mod:`mien.rig.au_solve`), and MediaPipe's ``noseSneer``
 never moves, on the rigs or on the real human media (the rig report: AU9 is "not seen"). Disgust's nose wrinkle
 (AU9) is then invisible to the FACS reading, and a disgust whose other signs overlap anger's (Broekens' Table 1
 disgust pulls the inner brows 13 mm together and lifts the lower lids) reads as anger. The issue "Faces that read"

@@ -16,7 +16,7 @@ Metrics, per expression over all renders:
   summing to 1 over the classifier's labels, it is the mean probability of the target label; the study's
   human values (:data:`HUMAN_QUALITY`) are shown beside it;
 * disgust's FACS signs: AU9 (nose wrinkler) and AU10 (upper-lip raiser) estimated from the detected
-  blendshapes (:class:`~mien.validate.au_solve.AUSolver`) against the same head's neutral, and the
+  blendshapes (:class:`~mien.rig.au_solve.AUSolver`) against the same head's neutral, and the
   geometric shortening of the nose-to-upper-lip distance on the rendered mesh (iBUG landmarks 33 -> 51),
   because the shipped classifier almost never answers "disgust" and cannot be the judge of it;
 * the FACS reading (:attr:`StimulusScore.facs_top`): a second judge that reads the face as a FACS coder would.
@@ -520,8 +520,8 @@ def run_recognition(
 ) -> RecognitionResult:
     """Render and classify every stimulus (grouped by head, basis and view so each setup is built once)."""
     from mien.progress import progress as progress_bar
+    from mien.rig.au_solve import AUSolver
     from mien.rig.heads import load_head
-    from mien.validate.au_solve import AUSolver
     from mien.validate.emotion_classifier import FRAMINGS
     from mien.validate.face_detector import FaceDetector
     from mien.validate.landmark_aus import LandmarkAUs

@@ -45,9 +45,9 @@ def _sha256(path: str | Path | None) -> str:
 
 def environment(models: Mapping[str, str | None]) -> dict[str, Any]:
     """Versions of mien, its tables, the libraries, and the models (path, bytes, SHA-256)."""
-    from mien import __version__
     from mien.facs.prototypes import PROTOTYPES_VERSION
     from mien.rig.mapping import AUMapping
+    from mien.version import __version__
 
     libraries = library_versions(_LIBRARIES)
     return {

@@ -3,7 +3,7 @@
 For every head, every AU of a chosen set (default the 18 OpenFACS AUs, both sides) is commanded alone on a
 neutral face at FACS intensities A..E (1..5), rendered frontally, passed to a detector (MediaPipe Face
 Landmarker: 52 ARKit blendshape scores) and turned back into AU intensities 0..5 by
-:class:`~mien.validate.au_solve.AUSolver`. The neutral face is rendered once as the baseline (commanded 0).
+:class:`~mien.rig.au_solve.AUSolver`. The neutral face is rendered once as the baseline (commanded 0).
 The solver always estimates the 18 OpenFACS AUs plus any other commanded AU, so a leak into an AU that was not
 commanded shows up.
 
@@ -246,7 +246,7 @@ class HumanEvidence:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-dict form (ranges by ARKit name, rounded to 1e-4; the per-face scores are left out)."""
-        from mien.rig.arkit import ARKIT_NAMES
+        from mien.facs.arkit import ARKIT_NAMES
 
         return {
             "folder": self.folder,
@@ -262,7 +262,7 @@ class HumanEvidence:
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> HumanEvidence:
         """Inverse of :meth:`to_dict` (without the per-face scores)."""
-        from mien.rig.arkit import ARKIT_NAMES
+        from mien.facs.arkit import ARKIT_NAMES
 
         ranges = data["blendshape_range"]
         return cls(
@@ -371,7 +371,7 @@ class HeadFidelity:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-dict form (NaN as None; values rounded to 1e-4)."""
-        from mien.rig.arkit import ARKIT_NAMES
+        from mien.facs.arkit import ARKIT_NAMES
 
         stats = self._stats()
         per_au = {}
@@ -789,8 +789,8 @@ def run_rig_fidelity(
     from mien.facs.catalogue import OPENFACS_AUS
     from mien.paths import require_asset
     from mien.render.camera import camera_from_options
+    from mien.rig.au_solve import AUSolver
     from mien.rig.heads import HEADS, ict_installed
-    from mien.validate.au_solve import AUSolver
 
     started = time.perf_counter()
     commanded = _check_aus(OPENFACS_AUS if aus is None else aus)
@@ -858,9 +858,9 @@ def _run_head(
     subtract_neutral: bool,
     show_progress: bool,
 ) -> HeadFidelity:
+    from mien.facs.arkit import ARKIT_NAMES
     from mien.facs.catalogue import FACE_CHANNELS, au_channels
     from mien.progress import progress as progress_bar
-    from mien.rig.arkit import ARKIT_NAMES
     from mien.rig.heads import load_head
     from mien.validate.stimuli import StimulusRenderer
 

@@ -60,7 +60,7 @@ class StimulusRenderer:
 
     def weights(self, frame: np.ndarray, feature_weights: np.ndarray | None = None) -> np.ndarray:
         """(n_targets,) float32 morph weights of a (62,) face frame (and optional (54,) feature weights)."""
-        from mien.animate import face_to_rig
+        from mien.rig.animate import face_to_rig
 
         frame = np.asarray(frame, dtype=np.float64)
         weights = self.mapping.to_weights(frame)

@@ -26,9 +26,7 @@ def node_modules_dir() -> Path:
     configured = os.environ.get("MIEN_NODE_MODULES")
     if configured:
         return Path(configured).expanduser()
-    import mien
-
-    return Path(mien.__file__).resolve().parents[2] / "node_modules"
+    return Path(__file__).resolve().parents[3] / "node_modules"  # src/mien/viewer/vendor.py -> checkout
 
 
 def three_dir() -> Path | None:

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mien.errors import InvalidValueError
-from mien.laughter.dtw import SeriesInput, as_series, as_series_list, dtw_distance_matrix, dtw_path
+from mien.learning.dtw import SeriesInput, as_series, as_series_list, dtw_distance_matrix, dtw_path
 
 __all__ = ["DBAResult", "dtw_barycenter"]
 
@@ -63,7 +63,7 @@ def dtw_barycenter(
     tol: float = 1e-5,
     window: int | None = None,
 ) -> DBAResult:
-    """DTW barycenter average of ``series`` (a collection; see :mod:`mien.laughter.dtw`).
+    """DTW barycenter average of ``series`` (a collection; see :mod:`mien.learning.dtw`).
 
     ``init``: (n_frames, n_channels) or (n_frames,) starting curve; None starts from the medoid (the member
     with the smallest sum of squared DTW distances to the others), which makes the result deterministic.

@@ -10,9 +10,9 @@ import pytest
 
 from mien.errors import InvalidValueError
 from mien.laughter.generator import generate
-from mien.laughter.learn import LearnResult, learn_library, read_labels, work_folder
 from mien.laughter.library import load_library
 from mien.laughter.names import CONTROLLER_NAMES
+from mien.learning.learn import LearnResult, learn_library, read_labels, work_folder
 
 
 @pytest.fixture(scope="module")

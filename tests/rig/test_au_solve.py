@@ -8,8 +8,8 @@ import pytest
 pytest.importorskip("scipy")
 
 from mien.facs.catalogue import FACE_CHANNELS, au_channels
+from mien.rig.au_solve import SOLVED_AUS, AUSolver
 from mien.rig.mapping import AUMapping
-from mien.validate.au_solve import SOLVED_AUS, AUSolver
 
 
 def _frame(mix: dict[int, float]) -> np.ndarray:

@@ -4,7 +4,7 @@ Pipeline: a folder of videos + a labels CSV (columns ``video,type,performer``) -
 
 1. labels: rows naming a missing file or an unknown type are skipped with a reason;
 2. per video (in parallel): track the face (:func:`mien.tracking.track.track_video`, cached) and turn each
-   take into controller curves (:func:`mien.laughter.controllers.controllers_from_track`); each video's
+   take into controller curves (:func:`mien.learning.takes.controllers_from_track`); each video's
    result is checkpointed in the output's work folder (``<library>.work/videos/``), so a re-run resumes and
    never recomputes a finished video; a failing video is reported and skipped;
 3. per type (in parallel): DTW distance matrices between all takes, one per controller (the paper's Table 3
@@ -57,7 +57,7 @@ __all__ = [
 CHECKPOINT_VERSION = 1
 """Bumped when per-video results change meaning, so old checkpoints are not reused."""
 CHECKPOINT_FORMAT = "mien-learn-checkpoint"
-"""Container kind of a per-video checkpoint (:mod:`mien.exchange.container`)."""
+"""Container kind of a per-video checkpoint (:mod:`mien.fileio.container`)."""
 MIN_TAKE_S = 0.5
 """Takes shorter than this (seconds) are rejected: too short to hold an onset, apex and offset."""
 LABEL_COLUMNS = ("video", "type", "performer")
@@ -193,7 +193,7 @@ class _VideoOutcome:
 def _process_video(job: _VideoJob) -> _VideoOutcome:
     """Track one video and compute controller curves per take (runs in a worker; never raises)."""
     try:
-        from mien.laughter.controllers import controllers_from_track
+        from mien.learning.takes import controllers_from_track
         from mien.tracking.track import track_video
 
         track = track_video(job.video, job.model, show_progress=False)
@@ -229,7 +229,7 @@ def _checkpoint_path(work: Path, job: _VideoJob) -> Path:
 
 
 def _save_checkpoint(path: Path, outcome: _VideoOutcome) -> None:
-    from mien.exchange.container import save_container
+    from mien.fileio.container import save_container
 
     meta = {"video": outcome.video, "fps": outcome.fps, "error": outcome.error, "n_takes": len(outcome.takes)}
     arrays = {f"take_{i}": values for i, values in enumerate(outcome.takes)}
@@ -237,7 +237,7 @@ def _save_checkpoint(path: Path, outcome: _VideoOutcome) -> None:
 
 
 def _load_checkpoint(path: Path) -> _VideoOutcome | None:
-    from mien.exchange.container import load_container
+    from mien.fileio.container import load_container
 
     try:
         box = load_container(path, CHECKPOINT_FORMAT, CHECKPOINT_VERSION)
@@ -253,7 +253,7 @@ def _load_checkpoint(path: Path) -> _VideoOutcome | None:
 
 def _type_dtw(series: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     """(16, n, n) per-controller and (n, n) multivariate DTW matrices of one type's takes."""
-    from mien.laughter.dtw import dtw_distance_matrices_per_channel, dtw_distance_matrix
+    from mien.learning.dtw import dtw_distance_matrices_per_channel, dtw_distance_matrix
 
     return dtw_distance_matrices_per_channel(series, n_jobs=1), dtw_distance_matrix(series, n_jobs=1)
 
@@ -474,7 +474,7 @@ def _collect_takes(rows: list[LabelRow], outcomes: dict[str, _VideoOutcome]) -> 
 def _representatives(
     by_type: dict[str, list[Take]], matrices: dict[str, tuple[np.ndarray, np.ndarray]], method: str, seed: int
 ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
-    from mien.laughter.clustering import KMedoidsDTW, representative_curve
+    from mien.learning.clustering import KMedoidsDTW, representative_curve
 
     curves: dict[str, np.ndarray] = {}
     extra: dict[str, Any] = {}
@@ -519,7 +519,7 @@ def _summary(result: LearnResult, multivariate: dict[str, np.ndarray]) -> str:
 
 def write_report(result: LearnResult, report_dir: str | os.PathLike[str], multivariate: dict[str, np.ndarray]) -> Path:
     """Write ``summary.txt``, ``dtw_<type>.txt`` tables, heat maps and prototype plots into ``report_dir``."""
-    from mien.laughter.dtw_report import format_dtw_table, plot_dtw_heatmap
+    from mien.learning.dtw_report import format_dtw_table, plot_dtw_heatmap
 
     folder = Path(report_dir)
     folder.mkdir(parents=True, exist_ok=True)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from mien.errors import InvalidValueError
-from mien.laughter.dtw import (
+from mien.learning.dtw import (
     as_series_list,
     dtw_cross_distance_matrix,
     dtw_distance,

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from mien.errors import InvalidValueError
-from mien.laughter.barycenter import dtw_barycenter
-from mien.laughter.clustering import KMeansDTW, KMedoidsDTW, representative_curve
-from mien.laughter.dtw import dtw_distance, dtw_distance_matrix
-from mien.laughter.dtw_report import column_statistics, format_dtw_table, plot_dtw_heatmap
+from mien.learning.barycenter import dtw_barycenter
+from mien.learning.clustering import KMeansDTW, KMedoidsDTW, representative_curve
+from mien.learning.dtw import dtw_distance, dtw_distance_matrix
+from mien.learning.dtw_report import column_statistics, format_dtw_table, plot_dtw_heatmap
 
 
 def smiles_and_frowns(seed: int = 0) -> tuple[list[np.ndarray], np.ndarray]:

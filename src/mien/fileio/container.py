@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from mien.errors import InvalidValueError, MissingAssetError
-from mien.exchange.streams import Source, Target, source_name
+from mien.fileio.streams import Source, Target, source_name
 
 __all__ = ["Container", "load_container", "save_container"]
 

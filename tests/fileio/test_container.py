@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from mien.errors import InvalidValueError, MissingAssetError
-from mien.exchange.container import load_container, save_container
+from mien.fileio import container
+from mien.fileio.container import load_container, save_container
 
 
 def test_round_trip_to_a_path_and_a_stream(tmp_path: Path) -> None:
@@ -26,7 +27,6 @@ def test_round_trip_to_a_path_and_a_stream(tmp_path: Path) -> None:
 
 
 def test_failed_write_keeps_the_old_file(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    from mien.exchange import container
 
     path = save_container(tmp_path / "box.npz", "mien-test", 1, {"n": 1}, {"x": np.zeros(3)})
     assert path is not None
@@ -104,7 +104,7 @@ def test_laugh_libraries_and_checkpoints_use_the_container(tmp_path: Path) -> No
     with pytest.raises(InvalidValueError, match=r"library\.npz.*corrupt or truncated"):
         load_library(path)
 
-    from mien.laughter import learn
+    from mien.learning import learn
 
     outcome = learn._VideoOutcome("v.mp4", (np.ones((5, 16)),), 30.0, "", False)
     checkpoint = tmp_path / "videos" / "v.npz"

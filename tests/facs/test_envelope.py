@@ -7,8 +7,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from mien.affect.envelope import Envelope, envelope_value, envelope_values
 from mien.errors import InvalidValueError
+from mien.facs.envelope import Envelope, envelope_value, envelope_values
 
 
 def test_study_timings() -> None:

@@ -31,8 +31,8 @@ from typing import Literal
 import numpy as np
 
 from mien.errors import InvalidValueError, MissingExtraError
-from mien.laughter.barycenter import dtw_barycenter
-from mien.laughter.dtw import SeriesInput, as_series_list, dtw_cross_distance_matrix, dtw_distance_matrix
+from mien.learning.barycenter import dtw_barycenter
+from mien.learning.dtw import SeriesInput, as_series_list, dtw_cross_distance_matrix, dtw_distance_matrix
 
 __all__ = ["SILHOUETTE_THRESHOLD", "KMeansDTW", "KMedoidsDTW", "representative_curve"]
 
@@ -136,7 +136,7 @@ class KMedoidsDTW:
         self.window = window
 
     def fit(self, series: SeriesInput | None = None, *, precomputed: np.ndarray | None = None) -> KMedoidsDTW:
-        """Cluster ``series`` (a collection, see :mod:`mien.laughter.dtw`) or a precomputed (n, n) matrix."""
+        """Cluster ``series`` (a collection, see :mod:`mien.learning.dtw`) or a precomputed (n, n) matrix."""
         items: list[np.ndarray] | None = None
         if precomputed is None:
             if series is None:
@@ -264,7 +264,7 @@ def representative_curve(
     """The prototype of the main (largest) DTW cluster of ``series``: (n_frames, n_channels) float64.
 
     ``method="medoid"`` returns that cluster's medoid (a real performance); ``"dba"`` its DTW barycenter
-    average (:func:`~mien.laughter.barycenter.dtw_barycenter`, started from the medoid, ``max_iter`` steps,
+    average (:func:`~mien.learning.barycenter.dtw_barycenter`, started from the medoid, ``max_iter`` steps,
     relative tolerance ``tol``), which has the medoid's length. Clustering as in :class:`KMedoidsDTW`.
     """
     if method not in ("medoid", "dba"):

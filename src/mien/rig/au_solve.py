@@ -26,8 +26,8 @@ from typing import Any
 import numpy as np
 
 from mien.errors import InvalidValueError, MissingExtraError
+from mien.facs.arkit import ARKIT_NAMES
 from mien.facs.catalogue import OPENFACS_AUS, au_channels
-from mien.rig.arkit import ARKIT_NAMES
 from mien.rig.mapping import INTENSITY_E, AUMapping
 
 __all__ = ["SOLVED_AUS", "AUSolver"]

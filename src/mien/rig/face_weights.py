@@ -2,9 +2,9 @@
 
 A clip reaches a rig in one of two vocabularies: face channels (AU intensities 0..5 and pose degrees,
 :data:`~mien.facs.catalogue.FACE_CHANNELS`), sent through the AU -> ARKit mapping by
-:func:`mien.animate.face_to_rig`; or the rig's own target names (weights 0..1, e.g. the 52 ARKit names), plus
+:func:`mien.rig.animate.face_to_rig`; or the rig's own target names (weights 0..1, e.g. the 52 ARKit names), plus
 optional pose channels, used as they are. The way back, ARKit weights -> AU intensities, is the NNLS solve of
-:class:`mien.validate.au_solve.AUSolver`.
+:class:`mien.rig.au_solve.AUSolver`.
 """
 
 from __future__ import annotations
@@ -14,9 +14,9 @@ import warnings
 import numpy as np
 
 from mien.errors import InvalidValueError
+from mien.facs.arkit import ARKIT_NAMES
 from mien.facs.catalogue import FACE_CHANNELS, POSE_CHANNELS
 from mien.facs.clip import Clip
-from mien.rig.arkit import ARKIT_NAMES
 from mien.rig.model import Rig
 
 __all__ = ["clip_to_rig", "is_weight_clip", "weights_to_au"]
@@ -55,7 +55,7 @@ def clip_to_rig(clip: Clip, rig: Rig) -> tuple[np.ndarray, np.ndarray]:
             unknown[0],
             f"face channels (AU1L, AU12R, head_yaw_deg...) or target names of head {rig.name!r} (eyeBlinkLeft...)",
         )
-    from mien.animate import face_to_rig
+    from mien.rig.animate import face_to_rig
 
     weights, poses = face_to_rig(rig, clip)
     return np.asarray(weights, np.float32), np.asarray(poses, np.float64)
@@ -67,7 +67,7 @@ def weights_to_au(clip: Clip) -> Clip:
     ``clip`` channels: ARKit names (weights 0..1; missing ones count as 0) and optional pose channels, which
     are kept. AUs the solver does not estimate stay 0.
     """
-    from mien.validate.au_solve import AUSolver
+    from mien.rig.au_solve import AUSolver
 
     unknown = [c for c in clip.channels if c not in ARKIT_NAMES and c not in POSE_CHANNELS]
     if unknown:
