@@ -25,7 +25,8 @@ from typing import Any
 
 import numpy as np
 
-from mien.errors import InvalidValueError, MissingExtraError
+from mien.errors import InvalidValueError
+from mien.extras import require
 from mien.facs.arkit import ARKIT_NAMES
 from mien.facs.catalogue import OPENFACS_AUS, au_channels
 from mien.rig.mapping import INTENSITY_E, AUMapping
@@ -37,11 +38,8 @@ SOLVED_AUS: tuple[int, ...] = OPENFACS_AUS
 
 
 def _nnls() -> Any:
-    try:
-        from scipy.optimize import nnls
-    except ImportError:
-        raise MissingExtraError("scipy", "validate") from None
-    return nnls
+    # scipy only: converting blendshape weights to AUs must not ask for the video extras (mediapipe)
+    return require("scipy.optimize", "au").nnls
 
 
 class AUSolver:
