@@ -70,3 +70,19 @@ def test_impossible_parameters_name_the_field(field: str, kwargs: dict[str, obje
 def test_bad_aspect_is_rejected() -> None:
     with pytest.raises(InvalidValueError, match="aspect"):
         Camera().projection_matrix(0.0)
+
+
+def test_views_are_the_one_registry_of_camera_presets() -> None:
+    from mien.render.camera import CAMERA_PRESETS, VIEWS, View
+
+    assert list(VIEWS) == ["frontal-1m", "frontal-3m", "oblique-1m", "oblique-3m", "lateral-1m", "lateral-3m"]
+    assert [v.in_study for v in VIEWS.values()] == [True, True, False, False, True, True]
+    oblique = CAMERA_PRESETS["oblique-1m"]
+    assert (oblique.yaw_deg, oblique.distance_m, oblique.target) == (45.0, 1.0, (0.0, -0.03, 0.0))
+    assert CAMERA_PRESETS["lateral-3m"].target == (0.0, -0.03, -0.06)
+    assert all(CAMERA_PRESETS[name] == view.camera for name, view in VIEWS.items())
+    assert View("lateral", 2.0).camera == camera_from_options("lateral-1m", distance_m=2.0)
+    with pytest.raises(UnknownNameError):
+        View("overhead", 1.0)
+    with pytest.raises(InvalidValueError):
+        View("frontal", 0.0)

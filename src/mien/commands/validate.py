@@ -9,10 +9,11 @@ from pathlib import Path
 from typing import Any
 
 from mien.commands._checks import input_file, input_folder, output_folder
+from mien.render.camera import VIEWS
 
 __all__ = ["parse_heads", "register"]
 
-_VIEWS_STUDY = ("frontal-1m", "frontal-3m", "oblique-1m", "oblique-3m", "lateral-1m", "lateral-3m")
+_VIEWS_STUDY = tuple(VIEWS)
 
 
 def parse_heads(specs: list[str] | None) -> list[tuple[str, str]]:

@@ -5,7 +5,7 @@ Importing this package needs only numpy; moderngl, imageio-ffmpeg, Pillow and Py
 'mien[render]'``) are imported when used.
 """
 
-from mien.render.camera import CAMERA_PRESETS, STUDY_FOV_DEG, Camera, camera_from_options
+from mien.render.camera import CAMERA_PRESETS, STUDY_FOV_DEG, VIEWS, Camera, View, camera_from_options
 from mien.render.clip_render import render_clip, render_still
 from mien.render.contact_sheet import contact_sheet
 from mien.render.offscreen import EGLUnavailableError, OffscreenRenderer, vertex_normals
@@ -14,10 +14,12 @@ from mien.render.video import VideoInfo, read_video_info, write_mp4, write_png
 __all__ = [
     "CAMERA_PRESETS",
     "STUDY_FOV_DEG",
+    "VIEWS",
     "Camera",
     "EGLUnavailableError",
     "OffscreenRenderer",
     "VideoInfo",
+    "View",
     "camera_from_options",
     "contact_sheet",
     "read_video_info",

@@ -9,9 +9,11 @@ clip space -1..1) and are row-major numpy arrays: transpose before uploading the
 uniform.
 
 Broekens, Qu & Brinkman showed one face at 1 m and 3 m, frontally and in a 90-degree lateral view, at one
-field of view. The presets here use a vertical field of view of 22 degrees: the angle a 15-inch 4:3 screen
-(22.9 cm tall, the study's required screen) subtends at a 60 cm viewing distance, so a full-screen stimulus
-shows the face in natural perspective, and the 3 m face is a third the size of the 1 m face.
+field of view; mien adds a 45-degree oblique view. :data:`VIEWS` is the one registry of these viewing
+conditions (every other module imports it); :data:`CAMERA_PRESETS` is built from it. The presets use a
+vertical field of view of 22 degrees: the angle a 15-inch 4:3 screen (22.9 cm tall, the study's required
+screen) subtends at a 60 cm viewing distance, so a full-screen stimulus shows the face in natural
+perspective, and the 3 m face is a third the size of the 1 m face.
 """
 
 from __future__ import annotations
@@ -24,7 +26,17 @@ import numpy as np
 
 from mien.errors import InvalidValueError, UnknownNameError
 
-__all__ = ["CAMERA_PRESETS", "STUDY_FOV_DEG", "Camera", "camera_from_options"]
+__all__ = [
+    "CAMERA_PRESETS",
+    "STUDY_ANGLES",
+    "STUDY_FOV_DEG",
+    "VIEWS",
+    "VIEW_ANGLES_DEG",
+    "VIEW_DISTANCES_M",
+    "Camera",
+    "View",
+    "camera_from_options",
+]
 
 STUDY_FOV_DEG = 22.0
 """Vertical field of view (degrees) shared by all presets: 2 * atan(11.45 cm / 60 cm), a 15-inch 4:3 screen
@@ -136,15 +148,72 @@ class Camera:
         return np.c_[(ndc[:, 0] + 1.0) * 0.5 * width, (1.0 - ndc[:, 1]) * 0.5 * height]
 
 
+VIEW_ANGLES_DEG: dict[str, float] = {"frontal": 0.0, "oblique": 45.0, "lateral": 90.0}
+"""View angle name -> camera yaw in degrees toward the character's left."""
+
+STUDY_ANGLES: tuple[str, ...] = ("frontal", "lateral")
+"""The view angles of the Broekens study (``oblique`` is mien's addition)."""
+
+VIEW_DISTANCES_M: tuple[float, ...] = (1.0, 3.0)
+"""Viewing distances of the Broekens study, metres."""
+
+
+@dataclass(frozen=True)
+class View:
+    """One named viewing condition: a view angle at a distance, at :data:`STUDY_FOV_DEG`.
+
+    >>> VIEWS["oblique-3m"].yaw_deg, VIEWS["oblique-3m"].distance_m
+    (45.0, 3.0)
+    """
+
+    angle: str
+    """A key of :data:`VIEW_ANGLES_DEG`: ``"frontal"``, ``"oblique"`` or ``"lateral"``."""
+    distance_m: float
+    """Camera distance from the target, metres (> 0)."""
+
+    def __post_init__(self) -> None:
+        if self.angle not in VIEW_ANGLES_DEG:
+            raise UnknownNameError("view angle", self.angle, tuple(VIEW_ANGLES_DEG))
+        object.__setattr__(self, "distance_m", _finite("distance_m", self.distance_m))
+        if self.distance_m <= 0.0:
+            raise InvalidValueError("distance_m", self.distance_m, "a distance > 0 metres")
+
+    @property
+    def name(self) -> str:
+        """``"<angle>-<distance>m"``, e.g. ``"frontal-1m"``."""
+        return f"{self.angle}-{self.distance_m:g}m"
+
+    @property
+    def yaw_deg(self) -> float:
+        """Camera yaw, degrees toward the character's left."""
+        return VIEW_ANGLES_DEG[self.angle]
+
+    @property
+    def in_study(self) -> bool:
+        """Whether the Broekens study showed this view (frontal or lateral)."""
+        return self.angle in STUDY_ANGLES
+
+    @property
+    def camera(self) -> Camera:
+        """The camera of this view: the profile looks at the middle of the head, the others at the face."""
+        target = HEAD_CENTRE_M if self.yaw_deg >= 90.0 else FACE_CENTRE_M
+        return Camera(yaw_deg=self.yaw_deg, distance_m=self.distance_m, target=target)
+
+
+VIEWS: dict[str, View] = {
+    view.name: view
+    for view in (View(angle, distance) for angle in VIEW_ANGLES_DEG for distance in VIEW_DISTANCES_M)
+}
+"""View name -> :class:`View`: ``frontal-1m``, ``frontal-3m``, ``oblique-1m``, ``oblique-3m``, ``lateral-1m``,
+``lateral-3m``, all at the study's field of view."""
+
 CAMERA_PRESETS: dict[str, Camera] = {
-    "frontal-1m": Camera(yaw_deg=0.0, distance_m=1.0),
-    "frontal-3m": Camera(yaw_deg=0.0, distance_m=3.0),
-    "lateral-1m": Camera(yaw_deg=90.0, distance_m=1.0, target=HEAD_CENTRE_M),
-    "lateral-3m": Camera(yaw_deg=90.0, distance_m=3.0, target=HEAD_CENTRE_M),
+    **{name: view.camera for name, view in VIEWS.items()},
     "portrait": Camera(yaw_deg=0.0, pitch_deg=0.0, distance_m=0.85, target=(0.0, -0.01, 0.0)),
 }
-"""Named cameras: the Broekens conditions (frontal / 90-degree lateral from the character's left, 1 m / 3 m,
-all at :data:`STUDY_FOV_DEG`) and ``"portrait"``, which frames the whole head for stimuli and contact sheets."""
+"""Named cameras: one per :data:`VIEWS` entry (the Broekens conditions, frontal / 90-degree lateral from the
+character's left at 1 m / 3 m, and the 45-degree oblique views, all at :data:`STUDY_FOV_DEG`) and
+``"portrait"``, which frames the whole head for stimuli and contact sheets."""
 
 
 def camera_from_options(

@@ -39,6 +39,7 @@ from pathlib import Path
 from typing import Any
 
 from mien.errors import InvalidValueError, MienError, UnknownNameError
+from mien.render.camera import STUDY_ANGLES
 
 __all__ = [
     "BROEKENS_EXPRESSIONS",
@@ -67,8 +68,8 @@ BROEKENS_EXPRESSIONS: tuple[str, ...] = (
 )  # fmt: skip
 """The ten expressions of the Broekens study (six basic emotions, four blends), as in :mod:`mien.affect.emotions`."""
 
-VIEWS: tuple[str, ...] = ("frontal", "lateral")
-"""Camera views of the Broekens study (the ``frontal-*`` / ``lateral-*`` presets of :mod:`mien.render.camera`)."""
+VIEWS: tuple[str, ...] = STUDY_ANGLES
+"""Camera views of the Broekens study (:data:`mien.render.camera.STUDY_ANGLES`: ``frontal`` and ``lateral``)."""
 
 ORDERS: tuple[str, ...] = ("counterbalanced", "random", "fixed")
 """Orders of the within-subject blocks: balanced Latin square over participants, random per participant, or

@@ -142,13 +142,13 @@ class _Scenes:
         return self._rigs[key]
 
     def renderer(self, rig_key: tuple[str, str, str], view: str, distance_m: float) -> Any:
-        from mien.render.camera import camera_from_options
+        from mien.render.camera import View
         from mien.render.clip_render import make_renderer
 
         key = (*rig_key, view, distance_m)
         if key != self._key:
             self.close()
-            camera = camera_from_options(f"{view}-1m", distance_m=distance_m)
+            camera = View(view, distance_m).camera
             self._renderer = make_renderer(self.rig(*rig_key), camera, self.size, samples=0)
             self._key = key
         return self._renderer

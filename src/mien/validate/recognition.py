@@ -40,6 +40,7 @@ from typing import Any
 import numpy as np
 
 from mien.errors import InvalidValueError, UnknownNameError
+from mien.render.camera import VIEWS
 from mien.validate.detector import EMOTION_LABELS, Detector
 
 __all__ = [
@@ -95,17 +96,6 @@ def _paper_quality() -> dict[str, float]:
 HUMAN_QUALITY: dict[str, float] = _paper_quality()
 """Broekens et al.'s Table 4: recognition quality by the study's 19 participants (ten labels), read from
 ``mien/affect/data/broekens_table4.csv`` (the one copy; :func:`mien.study.quality.paper_table4` reads it too)."""
-
-VIEWS: dict[str, tuple[float, float]] = {
-    "frontal-1m": (0.0, 1.0),
-    "frontal-3m": (0.0, 3.0),
-    "oblique-1m": (45.0, 1.0),
-    "oblique-3m": (45.0, 3.0),
-    "lateral-1m": (90.0, 1.0),
-    "lateral-3m": (90.0, 3.0),
-}
-"""View name -> (camera yaw degrees toward the character's left, distance metres); all at the study's field of
-view. ``frontal`` and ``lateral`` are the study's conditions; ``oblique`` (45 degrees) is mien's addition."""
 
 PEAK_TIME_S = 0.55
 """Time of the sampled frame after the event starts: the middle of the default 0.4/0.3/0.3 s envelope's hold."""
@@ -239,11 +229,7 @@ def peak_face(expression: str, intensity: float, basis: str) -> tuple[np.ndarray
 
 
 def _camera(view: str) -> Any:
-    from mien.render.camera import FACE_CENTRE_M, HEAD_CENTRE_M, Camera
-
-    yaw, distance = VIEWS[view]
-    target = HEAD_CENTRE_M if yaw >= 90 else FACE_CENTRE_M
-    return Camera(yaw_deg=yaw, distance_m=distance, target=target)
+    return VIEWS[view].camera
 
 
 @dataclass(frozen=True, eq=False)

@@ -64,11 +64,12 @@ def _laughter() -> list[dict[str, Any]]:
 
 
 def _cameras() -> list[dict[str, Any]]:
-    from mien.render.camera import CAMERA_PRESETS
+    from mien.render.camera import VIEWS
 
     out = []
-    for name in ("frontal-1m", "lateral-1m", "frontal-3m", "lateral-3m"):
-        camera = CAMERA_PRESETS[name]
+    study_views = sorted((v for v in VIEWS.values() if v.in_study), key=lambda v: (v.distance_m, v.yaw_deg))
+    for view in study_views:
+        name, camera = view.name, view.camera
         out.append(
             {
                 "name": name,
