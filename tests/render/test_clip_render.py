@@ -2,27 +2,28 @@
 
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
 
 import numpy as np
 import pytest
-from PIL import Image
 
 from mien.errors import InvalidValueError, MissingExtraError
+from mien.render.appearance import rig_vertex_colors, visible_faces
 from mien.render.camera import CAMERA_PRESETS
 from mien.render.clip_render import render_clip, render_still
-from mien.render.offscreen import DEFAULT_BACKGROUND, EGLUnavailableError
+from mien.render.offscreen import DEFAULT_BACKGROUND, EGLUnavailableError, OffscreenRenderer
 from mien.render.video import read_video_info
+from mien.rig.builtin_head import builtin_head
 from mien.rig.model import Rig
+from mien.rig.pose import apply_pose
+
+Image = pytest.importorskip("PIL.Image", reason="pillow is not installed (pip install 'mien[render]')")
 
 
 @pytest.fixture(autouse=True)
 def _needs_gl() -> None:
     """Skip (with the reason) where no headless OpenGL context can be made."""
     try:
-        from mien.render.offscreen import OffscreenRenderer
-
         OffscreenRenderer(np.array([[0, 1, 2]]), 2, 2, CAMERA_PRESETS["portrait"]).close()
     except (EGLUnavailableError, MissingExtraError) as error:
         pytest.skip(f"no headless OpenGL here: {error}")
@@ -78,12 +79,7 @@ def test_bad_clip_input_is_rejected(rig: Rig, tmp_path: Path) -> None:
     assert list(tmp_path.iterdir()) == []
 
 
-@pytest.mark.skipif(importlib.util.find_spec("mien.rig.pose") is None, reason="mien.rig.pose not written yet")
 def test_poses_go_through_apply_pose(rig: Rig, tmp_path: Path) -> None:
-    from mien.render.appearance import rig_vertex_colors, visible_faces
-    from mien.render.offscreen import OffscreenRenderer
-    from mien.rig.pose import apply_pose
-
     camera = CAMERA_PRESETS["frontal-1m"]
     pose = np.array([40.0, 10.0, 0.0, 0.0, 0.0])
     turned = render_still(rig, None, camera, (96, 96), pose=pose, samples=0)
@@ -96,10 +92,7 @@ def test_poses_go_through_apply_pose(rig: Rig, tmp_path: Path) -> None:
     np.testing.assert_array_equal(np.asarray(Image.open(out / "frame_000000.png")), turned)
 
 
-@pytest.mark.skipif(importlib.util.find_spec("mien.rig.builtin_head") is None, reason="built-in head not written yet")
 def test_builtin_head_renders_centred_and_lit() -> None:
-    from mien.rig.builtin_head import builtin_head  # type: ignore[import-not-found,unused-ignore]
-
     image = render_still(builtin_head(), None, CAMERA_PRESETS["portrait"], (128, 128))
     mask = np.abs(image.astype(int) - DEFAULT_BACKGROUND).max(axis=2) > 3
     columns = np.flatnonzero(mask.any(axis=0))
@@ -129,7 +122,6 @@ def test_ict_head_renders_with_eyes_and_lips(ict_dir: Path) -> None:
 
 
 def test_render_failure_midway_keeps_a_partial_mp4(rig: Rig, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    from mien.render.offscreen import OffscreenRenderer
 
     original = OffscreenRenderer.render
     calls = []

@@ -22,6 +22,7 @@ from mien.rig.feature_points import (
     table1_weights,
 )
 from mien.rig.geodesic import EdgeGraph
+from mien.rig.ict_facekit import load_ict_facekit
 from mien.rig.model import MorphTarget, Rig
 
 TABLE1 = Path(__file__).resolve().parents[2] / "src/mien/affect/data/broekens_table1.csv"
@@ -274,11 +275,10 @@ def test_user_mesh_with_landmarks() -> None:
 
 
 def test_ict_head(ict_dir: Path, tmp_path_factory: pytest.TempPathFactory) -> None:
-    ict_facekit = pytest.importorskip("mien.rig.ict_facekit")
     with pytest.MonkeyPatch.context() as patch:
         if "MIEN_CACHE_DIR" not in os.environ:
             patch.setenv("MIEN_CACHE_DIR", str(tmp_path_factory.getbasetemp() / "mien-cache"))
-        rig = ict_facekit.load_ict_facekit(ict_dir)
+        rig = load_ict_facekit(ict_dir)
     fp = FeaturePointRig.build(rig)
     rig = rig.with_targets(fp.compile())
     happy = deform(rig, table1_weights(table1("happy"), 1.0))

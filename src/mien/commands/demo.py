@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from mien.affect.emotions import STUDY_EXPRESSIONS
 from mien.commands._checks import check_curve_request, output_folder, positive_fps
 from mien.commands._scene import add_scene_options, scene_from_args
 
@@ -14,8 +15,7 @@ if TYPE_CHECKING:
 
     from mien.facs.clip import Clip
 
-DEMO_SEQUENCE = ("joy", "sadness", "anger", "surprise", "disgust", "fear", "enthusiastic", "furious", "frustrated",
-                 "evil")  # fmt: skip
+DEMO_SEQUENCE = STUDY_EXPRESSIONS
 """The Broekens study's ten stimuli: six basic emotions, then the four blends."""
 
 SEGMENT_S = 2.0
