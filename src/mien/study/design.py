@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from mien.affect.emotions import MAX_INTENSITY, STUDY_EXPRESSIONS
 from mien.errors import InvalidValueError, MienError, UnknownNameError
 from mien.render.camera import STUDY_ANGLES
 
@@ -63,10 +64,9 @@ BROEKENS_FACTORS: tuple[str, ...] = ("head", "identity", "basis", "view", "dista
 MASCARO_FACTORS: tuple[str, ...] = ("laughter_type", "description")
 """Condition keys of a Mascaró stimulus, in manifest and CSV column order."""
 
-BROEKENS_EXPRESSIONS: tuple[str, ...] = (
-    "joy", "sadness", "anger", "surprise", "disgust", "fear", "enthusiastic", "furious", "frustrated", "evil"
-)  # fmt: skip
-"""The ten expressions of the Broekens study (six basic emotions, four blends), as in :mod:`mien.affect.emotions`."""
+BROEKENS_EXPRESSIONS: tuple[str, ...] = STUDY_EXPRESSIONS
+"""The ten expressions of the Broekens study (six basic emotions, four blends):
+:data:`mien.affect.emotions.STUDY_EXPRESSIONS`."""
 
 VIEWS: tuple[str, ...] = STUDY_ANGLES
 """Camera views of the Broekens study (:data:`mien.render.camera.STUDY_ANGLES`: ``frontal`` and ``lateral``)."""
@@ -283,7 +283,7 @@ def _rendered_broekens(path: Path, s: dict[str, Any]) -> list[tuple[str, dict[st
         if view not in VIEWS:
             raise UnknownNameError(f"view in {path} stimuli.views", view, VIEWS)
     distances = _number_list(path, "stimuli.distances_m", s.get("distances_m"), (1.0,), 0.1, 100.0)
-    intensities = _number_list(path, "stimuli.intensities", s.get("intensities"), (1.2,), 0.0, 5.0)
+    intensities = _number_list(path, "stimuli.intensities", s.get("intensities"), (1.2,), 0.0, MAX_INTENSITY)
     rows = []
     for (head, identity), basis, view, distance, intensity, expression in itertools.product(
         heads, bases, views, distances, intensities, expressions

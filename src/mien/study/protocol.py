@@ -14,6 +14,8 @@ import random
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from mien.affect.emotions import STUDY_EXPRESSIONS
+
 if TYPE_CHECKING:
     from mien.study.design import Design
 
@@ -26,18 +28,17 @@ __all__ = [
     "questions",
 ]
 
-BROEKENS_LABELS: tuple[tuple[str, str], ...] = (
-    ("joy", "joyful"),
-    ("sadness", "sad"),
-    ("anger", "angry"),
-    ("surprise", "surprised"),
-    ("disgust", "disgusted"),
-    ("fear", "afraid"),
-    ("enthusiastic", "enthusiastic"),
-    ("furious", "furious"),
-    ("frustrated", "frustrated"),
-    ("evil", "evil"),
-)
+_SHOWN_LABEL: dict[str, str] = {
+    "joy": "joyful",
+    "sadness": "sad",
+    "anger": "angry",
+    "surprise": "surprised",
+    "disgust": "disgusted",
+    "fear": "afraid",
+}
+"""Basic emotion -> the adjective the participants rated (a blend is shown by its own name)."""
+
+BROEKENS_LABELS: tuple[tuple[str, str], ...] = tuple((name, _SHOWN_LABEL.get(name, name)) for name in STUDY_EXPRESSIONS)
 """(name as in :mod:`mien.affect.emotions`, label shown) of the ten rated emotions: the study's six basic
 emotions and four blends (Broekens et al., section 3: joy, sad, angry, surprised, disgusted, afraid,
 enthusiastic, furious, frustrated, evil)."""
