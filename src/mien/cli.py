@@ -11,6 +11,7 @@ from typing import NoReturn
 
 from mien.commands import COMMAND_MODULES
 from mien.commands._checks import PENDING_OUTPUTS, prepare_outputs
+from mien.commands._vocabulary import PENDING_DEPRECATIONS, finish
 from mien.errors import MienError
 from mien.version import __version__
 
@@ -61,12 +62,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run ``mien`` with ``argv`` (default: ``sys.argv[1:]``) and return the exit code."""
     parser = build_parser()
     PENDING_OUTPUTS.clear()
+    PENDING_DEPRECATIONS.clear()
     try:
         args = parser.parse_args(argv)
+        finish(args)  # old spellings translated, conflicts between old and new spellings refused
     except UsageError as exc:
         PENDING_OUTPUTS.clear()
+        PENDING_DEPRECATIONS.clear()  # the error is what matters: one line
         print(f"{exc.prog}: error: {_one_line(exc)} (see {exc.prog} --help)", file=sys.stderr)
         return 2
+    for note in PENDING_DEPRECATIONS:
+        print(f"mien {args.command}: {note}", file=sys.stderr)
+    PENDING_DEPRECATIONS.clear()
     if getattr(args, "handler", None) is None:
         parser.print_help()
         return 0

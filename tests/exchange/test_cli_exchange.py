@@ -15,32 +15,32 @@ OPENFACE = "formats/OpenFace_Test.csv"
 
 def test_import_openface_then_export_everywhere(shared_data: Path, tmp_path: Path, capsys) -> None:
     clip_path = tmp_path / "of.npz"
-    assert main(["import", str(shared_data / OPENFACE), str(clip_path)]) == 0
+    assert main(["import", str(shared_data / OPENFACE), "-o", str(clip_path)]) == 0
     assert "100 frames at 1000 fps (AU clip" in capsys.readouterr().out
     clip = read_clip(clip_path)
     glb_path = tmp_path / "of.glb"
-    assert main(["export", str(clip_path), str(glb_path), "--head", "builtin", "--fps", "100"]) == 0
+    assert main(["export", str(clip_path), "-o", str(glb_path), "--head", "builtin", "--fps", "100"]) == 0
     assert read_clip(glb_path).n_frames == 10  # 0.099 s at 100 fps
     live = tmp_path / "live.csv"
-    assert main(["export", str(glb_path), str(live), "--format", "arkit_csv"]) == 0
+    assert main(["export", str(glb_path), "-o", str(live), "--format", "arkit_csv"]) == 0
     assert format_for(live) == "arkit_csv"
     back = tmp_path / "back.json"
-    assert main(["import", str(live), str(back), "--au"]) == 0
+    assert main(["import", str(live), "-o", str(back), "--au"]) == 0
     assert read_clip(back).n_frames == 10
     states = tmp_path / "of.jsonl"
-    assert main(["export", str(clip_path), str(states)]) == 0
+    assert main(["export", str(clip_path), "-o", str(states)]) == 0
     np.testing.assert_allclose(read_clip(states).values, clip.values, atol=1e-12)
 
 
 @pytest.mark.parametrize(
     ("argv", "message"),
     [
-        (["export", "{clip}", "{tmp}/x.anim", "--head", "ict"], "--head='ict' is invalid: expected no --head"),
-        (["export", "{clip}", "{tmp}/x.xyz"], "unknown output file suffix '.xyz'"),
-        (["export", "{clip}", "{tmp}/x.csv", "--format", "openface_csv"], "a format that can write"),
-        (["import", "{clip}", "{tmp}/x.glb"], "a mien clip path ending in .npz or .json"),
-        (["import", "{clip}", "{tmp}/x.npz", "--au"], "no --au"),
-        (["export", "{tmp}/bad.csv", "{tmp}/x.json"], "bad.csv line 3 column 2 (AU12L)"),
+        (["export", "{clip}", "-o", "{tmp}/x.anim", "--head", "ict"], "--head='ict' is invalid: expected no --head"),
+        (["export", "{clip}", "-o", "{tmp}/x.xyz"], "unknown output file suffix '.xyz'"),
+        (["export", "{clip}", "-o", "{tmp}/x.csv", "--format", "openface_csv"], "a format that can write"),
+        (["import", "{clip}", "-o", "{tmp}/x.glb"], "a mien clip path ending in .npz or .json"),
+        (["import", "{clip}", "-o", "{tmp}/x.npz", "--au"], "no --au"),
+        (["export", "{tmp}/bad.csv", "-o", "{tmp}/x.json"], "bad.csv line 3 column 2 (AU12L)"),
         (["render", "{clip}", "--seed", "3", "-o", "{tmp}/x.png"], "no --seed"),
         (["render", "laughter", "--no-idle", "-o", "{tmp}/x.png"], "no --no-idle"),
     ],

@@ -11,16 +11,16 @@ from mien.cli import main
 
 
 def test_send_over_udp_and_websocket(live, au_value, wait_until, capsys) -> None:
-    assert main(["send", "--au", "AU12=3", "--au", "AU6L=1.5", "--speed", "1", "--port", str(live.udp_port)]) == 0
+    assert main(["send", "--au", "AU12=3", "--au", "AU6L=1.5", "--speed", "1", "--udp-port", str(live.udp_port)]) == 0
     assert "sent" in capsys.readouterr().out
     wait_until(lambda: au_value(live, "a", "AU12L") == 3.0, what="AU12 from mien send")
     assert au_value(live, "a", "AU6L") == 1.5 and au_value(live, "a", "AU6R") == 0.0
     assert (
-        main(["send", "--emotion", "sadness", "--intensity", "1.2", "--character", "b", "--port", str(live.udp_port)])
+        main(["send", "--emotion", "sadness", "--intensity", "1.2", "--character", "b", "--udp-port", str(live.udp_port)])
         == 0
     )
     wait_until(lambda: au_value(live, "b", "AU15L") > 0.5, what="sadness on b")
-    argv = ["send", "--ws", "--port", str(live.http_port), "--character", "b", "--au", "AU26=2", "--speed", "1"]
+    argv = ["send", "--ws", "--http-port", str(live.http_port), "--character", "b", "--au", "AU26=2", "--speed", "1"]
     assert main(argv) == 0
     assert "frame tick" in capsys.readouterr().out
     wait_until(lambda: au_value(live, "b", "AU26") == 2.0, what="AU26 over the WebSocket")
@@ -36,10 +36,15 @@ def test_send_over_udp_and_websocket(live, au_value, wait_until, capsys) -> None
         (["send", "--laugh", "guffaw"], "guffaw"),
         (["send", "--pad", "2", "0", "0"], "pad[0]=2.0"),
         (["send"], "at least one of"),
-        (["send", "--emotion", "joy", "--port", "0"], "--port"),
+        (["send", "--emotion", "joy", "--udp-port", "0"], "--udp-port=0"),
+        (["send", "--emotion", "joy", "--ws", "--http-port", "70000"], "--http-port=70000"),
+        (["send", "--emotion", "joy", "--ws", "--udp-port", "5000"], "the WebSocket is on --http-port"),
+        (["send", "--emotion", "joy", "--http-port", "8000"], "--ws as well"),
+        (["send", "--emotion", "joy", "--port", "5001", "--udp-port", "5002"], "give --udp-port only"),
+        (["serve", "--head", "builtin:b", "--identity", "c"], "--identity 'c'"),
         (["serve", "--udp-port", "70000"], "--udp-port=70000"),
         (["serve", "--tick-hz", "0"], "--tick-hz=0.0"),
-        (["serve", "--head", "marble"], "--head='marble'"),
+        (["serve", "--head", "marble"], "unknown head 'marble'"),
         (["serve", "--udp-port", "5999", "--http-port", "5999"], "--http-port"),
         (["serve", "--token", "short"], "token"),
     ],

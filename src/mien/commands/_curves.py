@@ -8,6 +8,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 from mien.commands._checks import output_file, positive_fps, positive_seconds
+from mien.commands._vocabulary import ANIMATION_FPS, add_output
 
 if TYPE_CHECKING:
     from mien.facs.clip import Clip
@@ -20,12 +21,13 @@ def add_curve_options(parser: argparse.ArgumentParser, duration_s: float = 2.0) 
     parser.add_argument(
         "--duration", type=positive_seconds, default=duration_s, help="seconds to generate (default %(default)s)"
     )
-    parser.add_argument("--fps", type=positive_fps, default=60.0, help="frames per second (default %(default)s)")
+    parser.add_argument(
+        "--fps", type=positive_fps, default=ANIMATION_FPS, help="frames per second (default %(default)s)"
+    )
     parser.add_argument("--seed", type=int, default=0, help="seed of the idle behaviour (default %(default)s)")
     parser.add_argument("--no-idle", action="store_true", help="switch blinks, micro-motion, gaze and wobble off")
-    parser.add_argument(
-        "-o",
-        "--output",
+    add_output(
+        parser,
         type=output_file,
         help="save the curves: .csv, .json, .npz, .jsonl, .anim or .glb (docs/FORMATS.md; default: print active "
         "channels as CSV); missing folders are made",

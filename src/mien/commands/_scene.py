@@ -1,10 +1,11 @@
-"""Options shared by the subcommands that render a head (render, demo): head, identity, camera, size."""
+"""Options shared by the subcommands that render a head (render, demo): head, camera, size, basis."""
 
 from __future__ import annotations
 
 import argparse
 from typing import TYPE_CHECKING
 
+from mien.commands._vocabulary import add_head, basis_name
 from mien.errors import InvalidValueError
 from mien.render.camera import CAMERA_PRESETS
 
@@ -28,11 +29,12 @@ def parse_size(text: str) -> tuple[int, int]:
 
 
 def add_scene_options(parser: argparse.ArgumentParser, camera: str = "portrait") -> None:
-    """Add head, identity, camera and size options."""
-    parser.add_argument(
-        "--head", default="default", help="default (ICT-FaceKit if installed, else builtin), builtin, ict"
+    """Add head, camera, size and basis options."""
+    add_head(
+        parser,
+        help="head: default (ICT-FaceKit if installed, else builtin), builtin or ict, with an optional identity "
+        "(face morphology: builtin:b, ict:a, ict:mean...)",
     )
-    parser.add_argument("--identity", help="face morphology: builtin 'default'/'b'..., ICT 'mean'/'a'/'b'")
     parser.add_argument(
         "--camera",
         default=camera,
@@ -45,9 +47,9 @@ def add_scene_options(parser: argparse.ArgumentParser, camera: str = "portrait")
     parser.add_argument("--size", default="512x512", help="image size WIDTHxHEIGHT (default %(default)s)")
     parser.add_argument(
         "--basis",
-        choices=("facs", "feature-points"),
+        type=basis_name,
         default="facs",
-        help="emotion expression basis: EMFACS AU prototypes, or Broekens' Table 1 feature points",
+        help="emotion expression basis: facs (EMFACS AU prototypes) or feature_points (Broekens' Table 1)",
     )
 
 
@@ -58,5 +60,5 @@ def scene_from_args(args: argparse.Namespace) -> tuple[Rig, Camera, tuple[int, i
 
     size = parse_size(args.size)
     camera = camera_from_options(args.camera, args.yaw, args.pitch, args.distance, args.fov)
-    rig = load_head(args.head, args.identity, feature_points=args.basis == "feature-points")
+    rig = load_head(args.head, args.identity, feature_points=args.basis == "feature_points")
     return rig, camera, size

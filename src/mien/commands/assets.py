@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from mien.commands._checks import positive_seconds
+from mien.commands._vocabulary import add_output, add_quiet
 
 
 def register(subparsers: Any) -> None:
@@ -37,10 +38,12 @@ def register(subparsers: Any) -> None:
     fetch.add_argument("name", help="asset to fetch: ict-facekit")
     fetch.add_argument("--url", help="download from this URL instead (a mirror, or a zip of a pinned commit)")
     fetch.add_argument("--sha256", metavar="HEX", help="the SHA-256 the archive must have (64 hex digits)")
-    fetch.add_argument("--dest", type=Path, metavar="DIR", help="install into this folder (it must not exist yet)")
+    add_output(
+        fetch, type=Path, metavar="DIR", old=("--dest",), help="install into this folder (it must not exist yet)"
+    )
     fetch.add_argument("--force", action="store_true", help="replace an existing install at the destination")
     fetch.add_argument("--timeout", type=positive_seconds, default=30.0, help="network timeout, seconds (default 30)")
-    fetch.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_quiet(fetch)
     fetch.set_defaults(handler=run_fetch)
 
 
@@ -141,14 +144,14 @@ def run_fetch(args: argparse.Namespace) -> int:
         name,
         args.url,
         args.sha256,
-        args.dest,
+        args.output,
         force=args.force,
         show_progress=not args.quiet,
         timeout_s=args.timeout,
         verify=verify,
     )
     print(f"installed {name} ({SOURCES[name].licence} licence) in {path}")
-    if args.dest is not None:
+    if args.output is not None:
         from mien.paths import ASSETS
 
         env_var = ASSETS[SOURCES[name].asset][0]

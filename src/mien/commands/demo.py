@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 from mien.affect.emotions import STUDY_EXPRESSIONS
 from mien.commands._checks import check_curve_request, output_folder, positive_fps
 from mien.commands._scene import add_scene_options, scene_from_args
+from mien.commands._vocabulary import VIDEO_FPS, add_output, add_quiet
 
 if TYPE_CHECKING:
     import numpy as np
@@ -34,20 +35,22 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "blends enthusiastic, furious, frustrated and evil (Broekens et al.), with blinks and idle motion, "
         "rendered on the default head (ICT-FaceKit if installed, else the built-in head).",
     )
-    parser.add_argument(
-        "-o",
-        "--out",
+    add_output(
+        parser,
         type=output_folder,
         default=Path("mien-output"),
+        metavar="DIR",
         help="output folder, made if missing (default %(default)s)",
+        old=("--out",),
     )
     parser.add_argument(
         "--intensity", type=float, default=1.2, help="emotion intensity, 1.2 as in the study (default %(default)s)"
     )
-    parser.add_argument("--fps", type=positive_fps, default=30.0, help="frames per second (default %(default)s)")
+    parser.add_argument("--fps", type=positive_fps, default=VIDEO_FPS, help="frames per second (default %(default)s)")
     parser.add_argument("--seed", type=int, default=0, help="idle-behaviour seed")
     parser.add_argument("--no-video", action="store_true", help="only the curves, plot and contact sheet")
     add_scene_options(parser)
+    add_quiet(parser)
     parser.set_defaults(handler=run)
 
 
@@ -80,12 +83,11 @@ def run(args: argparse.Namespace) -> int:
     from mien.render.video import Mp4Writer, write_png
     from mien.rig.animate import face_to_rig
 
-    out: Path = args.out
+    out: Path = args.output
     # curves, plus per-frame rig weights and poses (frames themselves are streamed, one at a time)
     check_curve_request(SEGMENT_S * len(DEMO_SEQUENCE), args.fps, len(FACE_CHANNELS) + _RIG_VALUES_PER_FRAME)
     out.mkdir(parents=True, exist_ok=True)
-    basis = "feature_points" if args.basis == "feature-points" else "facs"
-    clip, features, peaks = demo_clip(args.intensity, args.fps, args.seed, basis)
+    clip, features, peaks = demo_clip(args.intensity, args.fps, args.seed, args.basis)
     rig, camera, size = scene_from_args(args)
     print(f"head: {rig.name} ({rig.n_vertices} vertices, {len(rig.targets)} morph targets); camera: {args.camera}")
     curves = write_csv(clip, out / "demo_curves.csv")
@@ -103,7 +105,8 @@ def run(args: argparse.Namespace) -> int:
         else:
             with Mp4Writer(video, clip.fps) as writer:
                 frames = iter_frames(rig, weights, renderer, poses)
-                for index, image in enumerate(progress(frames, total=clip.n_frames, desc="rendering demo.mp4")):
+                shown = progress(frames, clip.n_frames, "rendering demo.mp4", enabled=not args.quiet)
+                for index, image in enumerate(shown):
                     writer.write(image)
                     if index in peak_frames:
                         stills[peak_frames[index]] = image

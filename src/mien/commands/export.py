@@ -1,10 +1,11 @@
-"""``mien export INPUT OUTPUT``: any clip file mien reads -> any format it writes (.glb with the head)."""
+"""``mien export INPUT -o OUTPUT``: any clip file mien reads -> any format it writes (.glb with the head)."""
 
 from __future__ import annotations
 
 import argparse
 
 from mien.commands._checks import input_file, output_file, positive_fps
+from mien.commands._vocabulary import add_head, add_output
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -12,14 +13,25 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "export",
         help="convert a clip file to another format (.glb, .anim, Live Link CSV, .jsonl...)",
         description="Read INPUT (any format mien reads: .csv curves, Live Link Face or OpenFace CSV, .json, "
-        ".jsonl, .npz, .anim, .glb) and write OUTPUT in the format its suffix names: .glb (the head with the "
+        ".jsonl, .npz, .anim, .glb) and write -o OUTPUT in the format its suffix names: .glb (the head with the "
         "clip as animations of its morph weights and head rotation), .anim (Maya curves), .csv (time_s curves; "
         "--format arkit_csv for Live Link Face), .json, .jsonl (OpenFACS), .npz. Formats are in docs/FORMATS.md.",
     )
     parser.add_argument("input", type=input_file, help="clip file to read")
-    parser.add_argument("output", type=output_file, help="file to write; its suffix picks the format")
-    parser.add_argument("--head", help="head for .glb: default, builtin or ict (only .glb carries a head)")
-    parser.add_argument("--identity", help="head identity for .glb (see mien render --help)")
+    add_output(
+        parser,
+        type=output_file,
+        metavar="FILE",
+        required=True,
+        positional=True,
+        help="file to write; its suffix picks the format",
+    )
+    add_head(
+        parser,
+        default=None,
+        help="head for .glb: default, builtin or ict, with an optional identity (builtin:b, ict:a); only .glb "
+        "carries a head",
+    )
     parser.add_argument("--fps", type=positive_fps, help="resample the clip to this frame rate before writing")
     parser.add_argument("--format", help="output format when several share a suffix (arkit_csv for .csv)")
     parser.add_argument("--input-format", help="input format when its suffix and header do not tell")
@@ -35,9 +47,9 @@ def run(args: argparse.Namespace) -> int:
     output_format = format_for(args.output, "write", args.format)
     carries_head = output_format == "glb"
     if not carries_head:
-        for option, value in (("--head", args.head), ("--identity", args.identity)):
-            if value is not None:
-                refuse_option(option, value, f"{args.output.suffix} carries no head (only .glb does)")
+        if args.head is not None or args.identity is not None:
+            spec = ":".join(part for part in (args.head or "default", args.identity) if part)
+            refuse_option("--head", spec, f"{args.output.suffix} carries no head (only .glb does)")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         clip = reader_for(args.input, args.input_format)(args.input)

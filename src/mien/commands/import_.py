@@ -1,4 +1,4 @@
-"""``mien import INPUT OUTPUT``: an external recording (Live Link Face, OpenFace, OpenFACS, glTF...) -> a mien
+"""``mien import INPUT -o OUTPUT``: an external recording (Live Link Face, OpenFace, OpenFACS, glTF...) -> a mien
 clip (.npz or .json)."""
 
 from __future__ import annotations
@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 
 from mien.commands._checks import input_file, output_file
+from mien.commands._vocabulary import add_output
 
 CLIP_SUFFIXES = (".npz", ".json")
 """Suffixes of the mien clip files ``import`` writes."""
@@ -15,13 +16,20 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "import",
         help="import a recording (Live Link Face / OpenFace CSV, OpenFACS .jsonl, .glb, .anim) as a mien clip",
-        description="Read INPUT in any format mien reads and save it as a mien clip (.npz or .json). OpenFace "
+        description="Read INPUT in any format mien reads and save it as a mien clip (-o, .npz or .json). OpenFace "
         "and OpenFACS files become AU clips; Live Link Face CSV and .glb become ARKit weight clips, or AU clips "
         "with --au (a non-negative least-squares solve of the AU -> ARKit mapping). Skipped columns, keys and "
         "untracked rows are reported as warnings.",
     )
     parser.add_argument("input", type=input_file, help="file to import")
-    parser.add_argument("output", type=output_file, help="mien clip to write: .npz or .json")
+    add_output(
+        parser,
+        type=output_file,
+        metavar="FILE",
+        required=True,
+        positional=True,
+        help="mien clip to write: .npz or .json",
+    )
     parser.add_argument("--au", action="store_true", help="turn ARKit weights into AU intensities (0..5)")
     parser.add_argument("--input-format", help="input format when its suffix and header do not tell")
     parser.set_defaults(handler=run)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from mien.commands._checks import input_file, output_file, positive_fps, positive_seconds
+from mien.commands._vocabulary import ANIMATION_FPS, add_output
 
 __all__ = ["register", "run"]
 
@@ -22,11 +23,11 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     parser.add_argument("--intensity", type=float, default=1.0, help="gain 0..5, 1 = typical (default 1)")
     parser.add_argument("--duration", type=positive_seconds, default=None, help="length in seconds (default: typical)")
     parser.add_argument("--seed", type=int, default=0, help="random seed for natural variation (default 0)")
-    parser.add_argument("--fps", type=positive_fps, default=60.0, help="frames per second (default 60)")
-    parser.add_argument("--library", default=None, type=input_file, help="a learned library .npz (default: built-in)")
     parser.add_argument(
-        "-o", "--output", default=None, type=output_file, help="output file: .csv, .json, .npz or .anim"
+        "--fps", type=positive_fps, default=ANIMATION_FPS, help="frames per second (default %(default)s)"
     )
+    parser.add_argument("--library", default=None, type=input_file, help="a learned library .npz (default: built-in)")
+    add_output(parser, type=output_file, metavar="FILE", help="output file: .csv, .json, .npz or .anim")
     parser.add_argument(
         "--curves",
         choices=("auto", "face", "controllers"),

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from mien.commands._checks import input_file, input_folder, output_file, output_folder
+from mien.commands._vocabulary import add_landmarker, add_output, add_quiet
 
 __all__ = ["register", "run"]
 
@@ -20,9 +21,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     )
     parser.add_argument("video_dir", metavar="DIR", type=input_folder, help="folder of the videos")
     parser.add_argument("--labels", required=True, type=input_file, help="CSV with columns video,type,performer")
-    parser.add_argument(
-        "-o", "--output", required=True, type=output_file, metavar="LIBRARY", help="library file to write (.npz)"
-    )
+    add_output(parser, type=output_file, required=True, metavar="LIBRARY", help="library file to write (.npz)")
     parser.add_argument("--eps", type=float, default=0.2, help="controller hardness factor (default 0.2)")
     parser.add_argument("--workers", type=int, default=None, help="worker processes (default: one per CPU; 0: none)")
     parser.add_argument("--scheduler", default=None, metavar="ADDRESS", help="run on this Dask scheduler instead")
@@ -31,10 +30,8 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "--report-dir", default=None, type=output_folder, help="write summary, DTW tables and plots here"
     )
     parser.add_argument("--seed", type=int, default=0, help="clustering seed (default 0)")
-    parser.add_argument(
-        "--model", default=None, type=input_file, help="face_landmarker.task (default: MIEN_FACE_LANDMARKER)"
-    )
-    parser.add_argument("--quiet", action="store_true", help="no progress bars")
+    add_landmarker(parser, type=input_file, old=("--model",))
+    add_quiet(parser)
     parser.set_defaults(handler=run)
 
 
@@ -59,7 +56,7 @@ def run(args: argparse.Namespace) -> int:
         method=args.method,
         report_dir=args.report_dir,
         seed=args.seed,
-        model=args.model,
+        model=args.landmarker,
         show_progress=not args.quiet,
     )
     print(result.summary)

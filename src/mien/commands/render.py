@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 
 from mien.commands._checks import output_target, positive_fps, positive_seconds
 from mien.commands._scene import add_scene_options, scene_from_args
+from mien.commands._vocabulary import VIDEO_FPS, add_output, add_quiet
 
 if TYPE_CHECKING:
     import numpy as np
@@ -26,21 +27,24 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "without suffix, a folder of PNG frames.",
     )
     parser.add_argument("what", nargs="+", help="emotion name, AU codes, laugh type, or a clip file")
-    parser.add_argument(
-        "-o",
-        "--output",
+    add_output(
+        parser,
         type=output_target,
         default=Path("mien-output/render.mp4"),
-        help="output path (folders are made)",
+        help="an .mp4, a .png still, or a folder of PNG frames (a path without suffix); folders are made "
+        "(default %(default)s)",
     )
     parser.add_argument(
         "--intensity", type=float, help="emotion intensity (default 1.2) or laugh gain (default 1); not for a clip file"
     )
     parser.add_argument("--duration", type=positive_seconds, help="seconds (default 2.5; not for a clip file)")
-    parser.add_argument("--fps", type=positive_fps, help="frames per second (default 30; not for a clip file)")
+    parser.add_argument(
+        "--fps", type=positive_fps, help=f"frames per second (default {VIDEO_FPS:g}; not for a clip file)"
+    )
     parser.add_argument("--seed", type=int, help="idle-behaviour or laugh seed (default 0; not for a clip file)")
     parser.add_argument("--no-idle", action="store_true", help="no blinks, micro-motion, gaze or wobble")
     add_scene_options(parser)
+    add_quiet(parser)
     parser.set_defaults(handler=run)
 
 
@@ -73,13 +77,12 @@ def _face_clip(args: argparse.Namespace) -> tuple[Clip, np.ndarray | None, int]:
     laugh = _laugh_type(args.what)
     if laugh is not None:
         return _laugh_clip(args, laugh)
-    args.fps = 30.0 if args.fps is None else args.fps
+    args.fps = VIDEO_FPS if args.fps is None else args.fps
     args.seed = 0 if args.seed is None else args.seed
     args.intensity = 1.2 if args.intensity is None else args.intensity
     args.duration = 2.5 if args.duration is None else args.duration
     check_curve_request(args.duration, args.fps, len(FACE_CHANNELS) + 128)  # curves + rig weights per frame
-    basis = "feature_points" if args.basis == "feature-points" else "facs"
-    character = Character(seed=args.seed, idle=not args.no_idle, expression_basis=basis)
+    character = Character(seed=args.seed, idle=not args.no_idle, expression_basis=args.basis)
     try:
         specs = [parse_au(text) for text in args.what]
     except UnknownNameError:
@@ -122,7 +125,7 @@ def _laugh_clip(args: argparse.Namespace, laugh: str) -> tuple[Clip, np.ndarray 
         refuse_option("--no-idle", True, "a generated laugh has no idle behaviour")
     if args.basis != "facs":
         refuse_option("--basis", args.basis, "a laugh drives AUs (the facs basis)")
-    fps = 30.0 if args.fps is None else args.fps
+    fps = VIDEO_FPS if args.fps is None else args.fps
     if args.duration is not None:
         check_curve_request(args.duration, fps, len(FACE_CHANNELS) + 128)
     intensity = 1.0 if args.intensity is None else args.intensity
@@ -150,6 +153,6 @@ def run(args: argparse.Namespace) -> int:
     if out.suffix.lower() == ".png":
         write_png(render_still(rig, weights[peak], camera, size, poses[peak]), out)
     else:
-        render_clip(rig, weights, out, clip.fps, camera, size, poses)
+        render_clip(rig, weights, out, clip.fps, camera, size, poses, progress=not args.quiet)
     print(f"rendered {rig.name} head: {out}")
     return 0

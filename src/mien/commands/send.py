@@ -4,14 +4,22 @@ from __future__ import annotations
 
 import argparse
 
+from mien.commands._vocabulary import add_deprecated_option
+
+DEFAULT_UDP_PORT = 5000
+"""The OpenFACS UDP port of ``mien serve`` (its ``--udp-port`` default)."""
+
+DEFAULT_HTTP_PORT = 8000
+"""The HTTP and WebSocket port of ``mien serve`` (its ``--http-port`` default)."""
+
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "send",
         help="send AUs, an emotion, PAD or a laugh to a running server",
         description="Send one message to `mien serve`: the full AU state (--au, missing AUs are 0, as in "
-        "OpenFACS), an emotion event, a PAD state or a laugh. UDP by default (no reply); --ws sends it over "
-        "the WebSocket and reports the frame that shows it.",
+        "OpenFACS), an emotion event, a PAD state or a laugh. UDP to --udp-port by default (no reply); --ws "
+        "sends it over the WebSocket on --http-port and reports the frame that shows it.",
     )
     parser.add_argument("--au", action="append", metavar="AU=INTENSITY", help="e.g. AU12=3 or AU6L=1.5 (repeatable)")
     parser.add_argument("--speed", type=float, help="OpenFACS Speed 0..1 per tick at 60 Hz (default 0.05 with --au)")
@@ -21,8 +29,24 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--pad", nargs=3, type=float, metavar=("P", "A", "D"), help="PAD state, each -1..1")
     parser.add_argument("--character", metavar="ID", help="target character (default: the server's first)")
     parser.add_argument("--host", default="127.0.0.1", help="server address (default %(default)s)")
-    parser.add_argument("--port", type=int, help="UDP port (default 5000), or HTTP port with --ws (default 8000)")
+    parser.add_argument("--udp-port", type=int, help=f"the server's OpenFACS UDP port (default {DEFAULT_UDP_PORT})")
+    parser.add_argument(
+        "--http-port", type=int, help=f"the server's HTTP + WebSocket port, with --ws (default {DEFAULT_HTTP_PORT})"
+    )
     parser.add_argument("--ws", action="store_true", help="send over the WebSocket instead of UDP")
+    old_port = add_deprecated_option(parser, "--port", "--udp-port, or --http-port with --ws", type=int, metavar="PORT")
+
+    def take_port(args: argparse.Namespace) -> None:
+        """The old ``--port`` meant the UDP port, or the HTTP port with ``--ws``: keep that meaning."""
+        port = getattr(args, old_port)
+        if port is None:
+            return
+        new = "--http-port" if args.ws else "--udp-port"
+        if getattr(args, new.lstrip("-").replace("-", "_")) is not None:
+            parser.error(f"--port {port} and {new} both name the port: give {new} only")
+        setattr(args, new.lstrip("-").replace("-", "_"), port)
+
+    parser.set_defaults(_finish_port=take_port)
     parser.add_argument("--token", help="access token (--ws to a server beyond loopback)")
     parser.set_defaults(handler=run)
 
@@ -68,23 +92,29 @@ def run(args: argparse.Namespace) -> int:
         parse_message(data)  # the server's own parser: a bad value is refused here, with its reason
     except MessageRejected as exc:
         raise InvalidValueError("message", message, f"a valid message ({exc.detail})") from None
-    if args.port is not None and not 0 < args.port <= 65535:
-        raise InvalidValueError("--port", args.port, "a port 1..65535")
+    if args.ws and args.udp_port is not None:
+        raise InvalidValueError("--udp-port", args.udp_port, "no --udp-port with --ws: the WebSocket is on --http-port")
+    if not args.ws and args.http_port is not None:
+        raise InvalidValueError("--http-port", args.http_port, "--ws as well (UDP goes to --udp-port)")
+    for option, port in (("--udp-port", args.udp_port), ("--http-port", args.http_port)):
+        if port is not None and not 0 < port <= 65535:
+            raise InvalidValueError(option, port, "a port 1..65535")
     if not args.ws:
         from mien.client import UdpClient, openfacs_message
 
-        with UdpClient(args.host, args.port or 5000) as client:
+        udp_port = DEFAULT_UDP_PORT if args.udp_port is None else args.udp_port
+        with UdpClient(args.host, udp_port) as client:
             if args.au or args.speed is not None:
                 aus = {k: v for k, v in message.items() if k.startswith("AU")}
                 rest = {k: v for k, v in message.items() if not k.startswith("AU") and k != "Speed"}
                 client.send_raw(openfacs_message(aus, message["Speed"], **rest))  # type: ignore[arg-type]
             else:
                 client.send_raw(data)
-        print(f"sent {len(data)} bytes to udp://{args.host}:{args.port or 5000}")
+        print(f"sent {len(data)} bytes to udp://{args.host}:{udp_port}")
         return 0
     from mien.client import WebSocketClient
 
-    url = f"ws://{args.host}:{args.port or 8000}/ws"
+    url = f"ws://{args.host}:{DEFAULT_HTTP_PORT if args.http_port is None else args.http_port}/ws"
     with WebSocketClient(url, character=args.character, token=args.token) as client:
         client.send(message)
         try:

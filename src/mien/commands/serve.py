@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from mien.commands._vocabulary import add_head
+
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
@@ -24,8 +26,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         metavar="ID",
         help="character id to create at start (repeatable; default: one called 'default')",
     )
-    parser.add_argument("--head", default="default", help="head of those characters: default, builtin, ict")
-    parser.add_argument("--identity", help="identity preset of the head")
+    add_head(parser, help="head of those characters: default, builtin or ict, with an optional identity (ict:b)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the first character (others: +1 each)")
     parser.add_argument("--no-idle", action="store_true", help="switch idle behaviour off")
     parser.add_argument("--check", action="store_true", help="start, print the addresses, then stop (a smoke test)")

@@ -1,5 +1,8 @@
 """``mien study``: perception studies. ``stimuli`` renders a design's videos and manifest, ``serve`` runs the web
-experiment, ``export`` writes the answers as CSV, ``analyze`` writes the HTML report (see docs/STUDIES.md)."""
+experiment, ``export`` writes the answers as CSV, ``analyze`` writes the HTML report (see docs/STUDIES.md).
+
+The stimuli folder is ``stimuli -o DIR`` where it is made, ``--stimuli DIR`` where it is read (default:
+``stimuli/`` next to the design)."""
 
 from __future__ import annotations
 
@@ -7,7 +10,8 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from mien.commands._checks import input_file, output_file, output_target
+from mien.commands._checks import input_file, output_file, output_folder, output_target
+from mien.commands._vocabulary import add_deprecated_alias, add_emotion_model, add_landmarker, add_output, add_quiet
 
 if TYPE_CHECKING:
     from mien.study.design import Design
@@ -25,12 +29,16 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(handler=lambda _args: parser.print_help() or 0)
     commands = parser.add_subparsers(dest="study_command", metavar="STUDY_COMMAND")
 
-    def with_design(name: str, help_text: str) -> argparse.ArgumentParser:
+    def with_design(name: str, help_text: str, reads_stimuli: bool = True) -> argparse.ArgumentParser:
         sub = commands.add_parser(name, help=help_text, description=help_text)
         sub.add_argument("design", type=input_file, help="the study design TOML file")
-        sub.add_argument(
-            "--stimuli", type=Path, help="stimuli folder with manifest.json (default: stimuli/ next to the design)"
-        )
+        if reads_stimuli:
+            sub.add_argument(
+                "--stimuli",
+                type=Path,
+                metavar="DIR",
+                help="stimuli folder with manifest.json (default: stimuli/ next to the design)",
+            )
         return sub
 
     def with_db(sub: argparse.ArgumentParser) -> None:
@@ -41,33 +49,46 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         )
 
     stimuli = with_design(
-        "stimuli", "render the design's stimulus videos (or check supplied ones) and write the manifest"
+        "stimuli", "render the design's stimulus videos (or check supplied ones) and write the manifest", False
     )
+    add_output(
+        stimuli,
+        type=output_folder,
+        metavar="DIR",
+        old=("--stimuli",),
+        help="stimuli folder to write, made if missing (default: stimuli/ next to the design)",
+    )
+    add_quiet(stimuli)
     stimuli.set_defaults(handler=run_stimuli)
 
     serve = with_design("serve", "run the web experiment (consent, instructions, stimuli, questions, completion)")
     with_db(serve)
     serve.add_argument("--host", default="127.0.0.1", help="address to listen on (default %(default)s)")
-    serve.add_argument("--port", type=int, default=8000, help="TCP port (default %(default)s; 0 = any free port)")
+    port = serve.add_argument(
+        "--http-port", type=int, default=8000, help="HTTP port (default %(default)s; 0 = any free port)"
+    )
+    add_deprecated_alias(serve, "--port", port)
     serve.set_defaults(handler=run_serve)
 
     export = with_design("export", "write the stored answers as one long CSV (one row per answered question)")
     with_db(export)
-    export.add_argument(
-        "-o", "--out", type=output_file, default=Path("answers.csv"), help="CSV path (default %(default)s)"
-    )
+    add_output(export, type=output_file, default=Path("answers.csv"), metavar="FILE", old=("--out",),
+               help="CSV path (default %(default)s)")  # fmt: skip
     export.set_defaults(handler=run_export)
 
     analyze = with_design("analyze", "analyse the answers (quality, profiles, rm-ANOVA, plots) into an HTML report")
     with_db(analyze)
     analyze.add_argument("--answers", type=input_file, help="analyse this exported CSV instead of the database")
-    analyze.add_argument(
-        "-o",
-        "--out",
+    add_output(
+        analyze,
         type=output_target,
         default=Path("study-report"),
+        old=("--out",),
         help="report folder, or a .html file (default %(default)s)",
     )
+    add_landmarker(analyze, type=input_file)
+    add_emotion_model(analyze, type=input_file)
+    add_quiet(analyze)
     analyze.set_defaults(handler=run_analyze)
 
 
@@ -78,7 +99,9 @@ def _design(args: argparse.Namespace) -> Design:
 
 
 def _stimuli_folder(args: argparse.Namespace, design: Design) -> Path:
-    return Path(args.stimuli) if args.stimuli is not None else design.path.parent / "stimuli"
+    """The stimuli folder: ``-o`` of ``study stimuli``, ``--stimuli`` of the others, else next to the design."""
+    given = args.output if args.study_command == "stimuli" else args.stimuli
+    return Path(given) if given is not None else design.path.parent / "stimuli"
 
 
 def _store(args: argparse.Namespace, design: Design) -> Store:
@@ -92,7 +115,7 @@ def run_stimuli(args: argparse.Namespace) -> int:
 
     design = _design(args)
     folder = _stimuli_folder(args, design)
-    result = make_stimuli(design, folder)
+    result = make_stimuli(design, folder, progress=not args.quiet)
     print(
         f"{len(design.stimuli)} stimuli in {folder} ({result.rendered} made, {result.skipped} already done); "
         f"manifest: {result.manifest_path}"
@@ -119,7 +142,7 @@ def _checked_manifest(design: Design, folder: Path) -> dict:
 def run_serve(args: argparse.Namespace) -> int:
     from mien.study.runner import create_app, listen, serve
 
-    sock = listen(args.host, args.port)  # first: a taken port is said before any work
+    sock = listen(args.host, args.http_port)  # first: a taken port is said before any work
     with sock:
         design = _design(args)
         folder = _stimuli_folder(args, design)
@@ -138,7 +161,7 @@ def run_export(args: argparse.Namespace) -> int:
 
     design = _design(args)
     with _store(args, design) as store:
-        path, rows = write_answers_csv(store, args.out, design.name)
+        path, rows = write_answers_csv(store, args.output, design.name)
     print(f"wrote {rows} answers of study {design.name!r} to {path}")
     return 0
 
@@ -161,6 +184,13 @@ def run_analyze(args: argparse.Namespace) -> int:
                 "answers", 0, f"at least one stored answer of study {design.name!r} (run `mien study serve` first)"
             )
         result = analyze(frame, factors, source=str(args.db or design.name))
-    path = write_report(result, args.out, stimuli=_stimuli_folder(args, design), progress=True)
+    path = write_report(
+        result,
+        args.output,
+        stimuli=_stimuli_folder(args, design),
+        landmarker=args.landmarker,
+        emotion_model=args.emotion_model,
+        progress=not args.quiet,
+    )
     print(f"report: {path}")
     return 0

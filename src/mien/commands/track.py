@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from mien.commands._checks import input_file, non_negative_seconds, output_file
+from mien.commands._vocabulary import add_landmarker, add_output, add_quiet
 
 __all__ = ["register", "run"]
 
@@ -21,12 +22,10 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         ),
     )
     parser.add_argument("video", type=input_file, help="video file (mp4, mov, avi, mkv, webm...)")
-    parser.add_argument(
-        "-o", "--output", type=output_file, help="write the track to this .npz or .json file (folders are made)"
+    add_output(
+        parser, type=output_file, metavar="FILE", help="write the track to this .npz or .json file (folders are made)"
     )
-    parser.add_argument(
-        "--model", type=input_file, help="face_landmarker.task (default: $MIEN_FACE_LANDMARKER or the config file)"
-    )
+    add_landmarker(parser, type=input_file, old=("--model",))
     parser.add_argument("--no-cache", action="store_true", help="track again even when a cached result exists")
     parser.add_argument(
         "--max-gap-s",
@@ -34,7 +33,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         default=0.2,
         help="longest gap (seconds) filled by interpolation (default 0.2)",
     )
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_quiet(parser)
     parser.set_defaults(handler=run)
 
 
@@ -47,7 +46,7 @@ def run(args: argparse.Namespace) -> int:
         raise InvalidValueError("output", args.output, "a path ending in .npz or .json")
     track = track_video(
         args.video,
-        args.model,
+        args.landmarker,
         max_gap_s=args.max_gap_s,
         use_cache=not args.no_cache,
         show_progress=not args.quiet,

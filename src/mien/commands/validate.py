@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from mien.commands._checks import input_file, input_folder, output_folder
+from mien.commands._vocabulary import add_emotion_model, add_landmarker, add_output, add_quiet, basis_list, head_list
 from mien.render.camera import VIEWS
 
 __all__ = ["parse_heads", "register"]
@@ -62,28 +63,25 @@ def _check_heads(heads: list[tuple[str, str]]) -> None:
 
 
 def _add_common(parser: argparse.ArgumentParser, default_out: str) -> None:
-    parser.add_argument(
-        "-o",
-        "--out",
+    add_output(
+        parser,
         type=output_folder,
         default=Path(default_out),
+        metavar="DIR",
+        dest="out",
+        old=("--out",),
         help="output folder, made if missing (default %(default)s)",
     )
     parser.add_argument(
         "--head",
         action="append",
+        type=head_list,
         metavar="HEAD[:IDENTITY]",
         help="head to validate, repeatable or comma-separated: ict:a, ict:b, builtin:default, builtin:b "
         "(default: every installed head and identity)",
     )
-    parser.add_argument(
-        "--landmarker", type=input_file, help="face_landmarker.task (default: $MIEN_FACE_LANDMARKER or the config)"
-    )
-    parser.add_argument(
-        "--emotion-model",
-        type=input_file,
-        help="emotion classifier .tflite (default: $MIEN_EMOTION_MODEL or the config)",
-    )
+    add_landmarker(parser, type=input_file)
+    add_emotion_model(parser, type=input_file)
     parser.add_argument(
         "--framing",
         choices=("landmarks", "fer"),
@@ -92,7 +90,7 @@ def _add_common(parser: argparse.ArgumentParser, default_out: str) -> None:
         "(the fer package's Haar-box framing, forehead to chin, calibrated on real faces; see docs/VALIDATION.md)",
     )
     parser.add_argument("--size", default="512x512", help="render size WIDTHxHEIGHT (default %(default)s)")
-    parser.add_argument("--quiet", action="store_true", help="no progress bars")
+    add_quiet(parser)
 
 
 def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -126,7 +124,10 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     )
     emotions.add_argument("--intensities", default="1.2,2.4", help="emotion intensities (default %(default)s)")
     emotions.add_argument(
-        "--basis", default="facs,feature-points", help="expression bases: facs, feature-points (default both)"
+        "--basis",
+        type=basis_list,
+        default="facs,feature_points",
+        help="expression bases, comma-separated: facs, feature_points (default both)",
     )
     emotions.add_argument("--expressions", help="comma-separated subset of the ten expressions (default all)")
     emotions.set_defaults(handler=run_emotions)
