@@ -26,7 +26,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("mien.render",),
     ("mien.exchange",),
     ("mien.tracking",),
-    ("mien.learning", "mien.assets"),
+    ("mien.learning", "mien.assets", "mien.heads"),
     ("mien.validate",),
     ("mien.study",),
     ("mien.viewer",),

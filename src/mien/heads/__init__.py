@@ -1,0 +1,1 @@
+"""Heads a user brings: instrumenting a mesh nobody measured (landmarks, size, axes, unit)."""

@@ -1,0 +1,387 @@
+"""Instrumenting a head nobody measured: landmarks, size, axes and unit found on the mesh itself.
+
+A user's character arrives without the facts mien's jobs need: where its face landmarks are, how big the face
+is, which way is up and forward, and whether the file is in metres or centimetres. :func:`instrument` finds
+them the way a person would look: it renders the bare mesh, finds MediaPipe's 478 face landmarks on the
+picture, casts each back onto the mesh (the nearest surface hit along the camera ray), and derives
+
+- the iBUG-68 landmark points and vertices (:mod:`mien.tracking.ibug68`), which drive the feature-point rig
+  (Table 1 on the user's face), the validation crops and the camera presets;
+- the face's size: the inter-ocular distance (outer eye corners, iBUG 36 and 45) in file units;
+- its up and forward axes, measured from the landmarks and snapped to the file's nearest axes;
+- its unit: the one of metres, centimetres, millimetres or inches that makes the inter-ocular distance human
+  (:data:`HUMAN_INTEROCULAR_M`), or an error when none does.
+
+The search tries the six axis-aligned viewing directions (glTF's +z forward / +y up first), frames the whole
+mesh, then re-frames on the face it found for a precise second look. Results are cached per file hash
+(:func:`instrument_cached`), written atomically, so a second call costs a file read.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable, Iterator
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from mien.errors import InvalidValueError, MienError
+from mien.fileio.streams import write_bytes
+from mien.paths import cache_dir
+from mien.render.camera import Camera
+from mien.render.offscreen import OffscreenRenderer
+from mien.tracking.ibug68 import ibug68
+from mien.tracking.landmarker import Landmarker
+
+__all__ = [
+    "HUMAN_INTEROCULAR_M",
+    "INSTRUMENT_VERSION",
+    "UNITS",
+    "FaceNotFoundError",
+    "Instrumentation",
+    "instrument",
+    "instrument_cached",
+]
+
+INSTRUMENT_VERSION = 1
+"""Bumped when the method changes, so cached results of an older method are recomputed."""
+
+HUMAN_INTEROCULAR_M = 0.090
+"""Adult distance between the outer eye corners (exocanthion to exocanthion), metres: about 86-94 mm
+(Farkas, *Anthropometry of the Head and Face*, 1994); the yardstick that tells a file's unit."""
+
+UNITS: dict[str, float] = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254}
+"""Units a head file may be written in, and the factor that turns one of them into metres."""
+
+_UNIT_TOLERANCE = 1.6
+"""A unit is accepted when the face's inter-ocular distance in it is within this factor of the human one."""
+
+_RENDER_PX = 640
+_CLOSE_MARGINS = (0.15, 0.25, 0.35)
+"""Margins of the closer looks around the face first found, as fractions of its size."""
+_FOV_DEG = 20.0
+_AXES = {"+x": (1, 0, 0), "-x": (-1, 0, 0), "+y": (0, 1, 0), "-y": (0, -1, 0), "+z": (0, 0, 1), "-z": (0, 0, -1)}
+_VIEWS: tuple[tuple[str, str], ...] = (
+    ("+z", "+y"), ("-z", "+y"), ("-y", "+z"), ("+y", "+z"), ("+x", "+y"), ("-x", "+y"),
+    ("+x", "+z"), ("-x", "+z"), ("+z", "-y"), ("-z", "-y"), ("-y", "-z"), ("+y", "-z"),
+)  # fmt: skip
+"""(forward, up) pairs tried in turn: glTF/VRM (+z forward, +y up), then Blender-style Z-up files, then sideways."""
+
+
+class FaceNotFoundError(MienError, ValueError):
+    """No face was found on the mesh from any direction."""
+
+
+@dataclass(frozen=True)
+class Instrumentation:
+    """What :func:`instrument` found on a head, in the file's own frame and unit."""
+
+    landmarks478: np.ndarray
+    """(478, 3) float32 surface points of MediaPipe's landmarks, file units and axes."""
+    ibug68_points: np.ndarray
+    """(68, 3) float32 iBUG-68 points (:func:`mien.tracking.ibug68.ibug68` of the 478), file units."""
+    ibug68_vertices: np.ndarray
+    """(68,) int32 the mesh vertex nearest each iBUG-68 point."""
+    interocular: float
+    """Distance between the outer eye corners (iBUG 36 and 45), file units."""
+    unit: str
+    """The file's unit, a key of :data:`UNITS`."""
+    up: tuple[float, float, float]
+    """The face's up axis, snapped to the nearest file axis (unit vector)."""
+    forward: tuple[float, float, float]
+    """The direction the face looks, snapped to the nearest file axis (unit vector)."""
+    tilt_deg: float
+    """Angle between the measured face up (chin to brow) and the snapped up axis, degrees (a head modelled
+    looking slightly down shows a few degrees)."""
+    hits: int
+    """How many of the 478 landmark rays hit the mesh (the rest are taken from their neighbours)."""
+    view: str
+    """The viewing direction that found the face, ``"forward/up"`` (e.g. ``"+z/+y"``)."""
+
+    @property
+    def metres_per_unit(self) -> float:
+        """Factor from file units to metres."""
+        return UNITS[self.unit]
+
+    def rotation(self) -> np.ndarray:
+        """(3, 3) float64 rotation from the file's axes to mien's (+x character's left, +y up, +z forward)."""
+        up = np.asarray(self.up, np.float64)
+        forward = np.asarray(self.forward, np.float64)
+        left = np.cross(up, forward)  # the character's left = up x forward in a right-handed frame
+        return np.stack([left, up, forward])
+
+    def to_json(self) -> str:
+        """A JSON text of every field (arrays as lists)."""
+        values = {key: value.tolist() if isinstance(value, np.ndarray) else value for key, value in asdict(self).items()}
+        return json.dumps({"version": INSTRUMENT_VERSION, **values})
+
+    @classmethod
+    def from_json(cls, text: str) -> Instrumentation:
+        """Read what :meth:`to_json` wrote; :class:`InvalidValueError` for another version or a broken text."""
+        try:
+            data = json.loads(text)
+            if data.pop("version") != INSTRUMENT_VERSION:
+                raise InvalidValueError("instrumentation cache", "an older version", "recomputed")
+            return cls(
+                landmarks478=np.asarray(data["landmarks478"], np.float32).reshape(478, 3),
+                ibug68_points=np.asarray(data["ibug68_points"], np.float32).reshape(68, 3),
+                ibug68_vertices=np.asarray(data["ibug68_vertices"], np.int32).reshape(68),
+                interocular=float(data["interocular"]),
+                unit=str(data["unit"]),
+                up=tuple(float(v) for v in data["up"]),  # type: ignore[arg-type]
+                forward=tuple(float(v) for v in data["forward"]),  # type: ignore[arg-type]
+                tilt_deg=float(data["tilt_deg"]),
+                hits=int(data["hits"]),
+                view=str(data["view"]),
+            )
+        except (KeyError, TypeError, ValueError) as error:
+            if isinstance(error, InvalidValueError):
+                raise
+            raise InvalidValueError("instrumentation cache", type(error).__name__, "a complete JSON record") from None
+
+
+def _frame(forward: str, up: str) -> np.ndarray:
+    """(3, 3) rotation taking file axes to a viewing frame whose +z is ``forward`` and +y is ``up``."""
+    f = np.asarray(_AXES[forward], np.float64)
+    u = np.asarray(_AXES[up], np.float64)
+    return np.stack([np.cross(u, f), u, f])
+
+
+def _camera_for(points: np.ndarray) -> tuple[Camera, np.ndarray, float]:
+    """A frontal camera framing ``points`` (viewing frame): ``(camera, centre, scale)``.
+
+    The points are moved to ``(points - centre) * scale`` so that their larger extent is 0.25 m (a head), then
+    seen from a distance that fills most of the picture.
+    """
+    low, high = points.min(axis=0), points.max(axis=0)
+    centre = 0.5 * (low + high)
+    extent = float(max(high[0] - low[0], high[1] - low[1], 1e-12))
+    scale = 0.25 / extent
+    depth_front = float(high[2] - centre[2]) * scale
+    distance = 0.5 * 0.25 * 1.15 / math.tan(math.radians(_FOV_DEG) / 2.0) + depth_front
+    return Camera(distance_m=distance, fov_deg=_FOV_DEG, target=(0.0, 0.0, 0.0), near_m=0.01), centre, scale
+
+
+def _project(camera: Camera, points: np.ndarray, size: int) -> np.ndarray:
+    """(n, 3) pixel x, pixel y (top-left origin) and eye-space depth (> 0 in front) of ``points`` (metres)."""
+    view = camera.view_matrix().astype(np.float64)
+    projection = camera.projection_matrix(1.0).astype(np.float64)
+    homogeneous = np.c_[points, np.ones(len(points))]
+    eye = homogeneous @ view.T
+    clip = eye @ projection.T
+    ndc = clip[:, :2] / clip[:, 3:4]
+    pixels = np.empty((len(points), 3))
+    pixels[:, 0] = (ndc[:, 0] + 1.0) * 0.5 * size
+    pixels[:, 1] = (1.0 - ndc[:, 1]) * 0.5 * size
+    pixels[:, 2] = -eye[:, 2]
+    return pixels
+
+
+def _cast(pixels: np.ndarray, faces: np.ndarray, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """For each (k, 2) target pixel, the nearest triangle covering it: ``(face ids (k,), barycentric (k, 3))``.
+
+    Screen-space barycentric coordinates with a depth test (the triangles are small on the picture, so the
+    missing perspective correction is far below a pixel). A pixel no triangle covers gets face id -1.
+    """
+    a, b, c = pixels[faces[:, 0]], pixels[faces[:, 1]], pixels[faces[:, 2]]
+    low = np.minimum(np.minimum(a[:, :2], b[:, :2]), c[:, :2])
+    high = np.maximum(np.maximum(a[:, :2], b[:, :2]), c[:, :2])
+    ids = np.full(len(targets), -1, np.int64)
+    weights = np.zeros((len(targets), 3))
+    for k, (x, y) in enumerate(targets):
+        near = np.flatnonzero((low[:, 0] <= x) & (x <= high[:, 0]) & (low[:, 1] <= y) & (y <= high[:, 1]))
+        if not len(near):
+            continue
+        pa, pb, pc = a[near], b[near], c[near]
+        v0, v1 = pb[:, :2] - pa[:, :2], pc[:, :2] - pa[:, :2]
+        v2 = np.array([x, y]) - pa[:, :2]
+        det = v0[:, 0] * v1[:, 1] - v1[:, 0] * v0[:, 1]
+        ok = np.abs(det) > 1e-12
+        safe = np.where(ok, det, 1.0)
+        w1 = (v2[:, 0] * v1[:, 1] - v1[:, 0] * v2[:, 1]) / safe
+        w2 = (v0[:, 0] * v2[:, 1] - v2[:, 0] * v0[:, 1]) / safe
+        w0 = 1.0 - w1 - w2
+        inside = ok & (w0 >= -1e-6) & (w1 >= -1e-6) & (w2 >= -1e-6)
+        if not inside.any():
+            continue
+        depth = w0 * pa[:, 2] + w1 * pb[:, 2] + w2 * pc[:, 2]
+        depth = np.where(inside & (depth > 0), depth, np.inf)
+        best = int(np.argmin(depth))
+        if not np.isfinite(depth[best]):
+            continue
+        ids[k] = near[best]
+        weights[k] = (w0[best], w1[best], w2[best])
+    return ids, weights
+
+
+RendererFactory = Callable[[Camera, int], OffscreenRenderer]
+"""Makes the renderer of one look: ``(camera, size in pixels) -> OffscreenRenderer`` of the head's faces."""
+
+
+def _bare(faces: np.ndarray) -> RendererFactory:
+    def make(camera: Camera, size: int) -> OffscreenRenderer:
+        return OffscreenRenderer(faces, size, size, camera, samples=4, cull_back_faces=False)
+
+    return make
+
+
+def _look(
+    landmarker: Landmarker,
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    rotation: np.ndarray,
+    around: np.ndarray,
+    renderer: RendererFactory,
+) -> tuple[np.ndarray, int] | None:
+    """Render ``vertices`` seen along ``rotation`` framing the points ``around`` (file frame) and find the face.
+
+    Returns ``(478 surface points in the file frame, rays that hit)``, or None when no face is on the picture.
+    """
+    viewed = vertices @ rotation.T
+    camera, centre, scale = _camera_for(around @ rotation.T)
+    placed = ((viewed - centre) * scale).astype(np.float32)
+    with renderer(camera, _RENDER_PX) as drawing:
+        image = drawing.render(placed)
+    found = landmarker.detect(image)
+    if found is None:
+        return None
+    targets = found.landmarks[:, :2].astype(np.float64) * _RENDER_PX
+    face_ids, weights = _cast(_project(camera, placed.astype(np.float64), _RENDER_PX), faces, targets)
+    hit = face_ids >= 0
+    if hit.sum() < 400:  # most of the face missed: the picture showed something else (or a very open mesh)
+        return None
+    points = np.zeros((478, 3))
+    points[hit] = np.einsum("kj,kjd->kd", weights[hit], vertices[faces[face_ids[hit]]])
+    if not hit.all():  # a landmark off the mesh (a hole, an eye with no cornea): take the nearest hit one's
+        from_pixels = targets[hit]
+        for k in np.flatnonzero(~hit):
+            points[k] = points[hit][int(np.argmin(np.linalg.norm(from_pixels - targets[k], axis=1)))]
+    return points, int(hit.sum())
+
+
+def _face_box(points: np.ndarray, rotation: np.ndarray, margin: float) -> np.ndarray:
+    """Two corner points (file frame) of the landmarks' box widened by ``margin`` of its size on every side."""
+    viewed = points @ rotation.T
+    low, high = viewed.min(axis=0), viewed.max(axis=0)
+    pad = margin * (high - low)
+    return np.stack([low - pad, high + pad]) @ rotation
+
+
+def _views() -> Iterator[tuple[str, np.ndarray]]:
+    for forward, up in _VIEWS:
+        yield f"{forward}/{up}", _frame(forward, up)
+
+
+def _snap(direction: np.ndarray) -> tuple[np.ndarray, float]:
+    """The file axis nearest ``direction`` and the angle between them, degrees."""
+    unit = direction / np.linalg.norm(direction)
+    axis = np.zeros(3)
+    k = int(np.argmax(np.abs(unit)))
+    axis[k] = math.copysign(1.0, unit[k])
+    return axis, math.degrees(math.acos(min(1.0, abs(float(unit[k])))))
+
+
+def _unit(interocular: float, name: str) -> str:
+    ratios = {unit: interocular * factor / HUMAN_INTEROCULAR_M for unit, factor in UNITS.items()}
+    unit = min(ratios, key=lambda u: abs(math.log(ratios[u])))
+    if not 1.0 / _UNIT_TOLERANCE <= ratios[unit] <= _UNIT_TOLERANCE:
+        raise InvalidValueError(
+            f"{name} unit",
+            f"an inter-ocular distance of {interocular:.4g} file units",
+            f"a face whose eyes are about {HUMAN_INTEROCULAR_M * 1000:.0f} mm apart in metres, centimetres, "
+            "millimetres or inches; rescale the file or say its unit",
+        )
+    return unit
+
+
+def instrument(
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    landmarker_model: str | Path | None = None,
+    name: str = "head",
+    renderer: RendererFactory | None = None,
+) -> Instrumentation:
+    """Find the face on the mesh ``vertices`` (n, 3) file units, ``faces`` (m, 3) triangles (see module doc).
+
+    ``landmarker_model`` is the MediaPipe ``face_landmarker.task`` (None: the configured asset). ``name`` (the
+    file's name) goes into errors. ``renderer`` draws the head's own look (textures, face paint); None draws
+    the bare mesh in one skin tone. Raises :class:`FaceNotFoundError` when no direction shows a face, and
+    :class:`InvalidValueError` for an empty mesh or a unit that cannot be told.
+    """
+    vertices = np.asarray(vertices, np.float64)
+    faces = np.ascontiguousarray(faces, np.int32)
+    if vertices.ndim != 2 or vertices.shape[1] != 3 or len(vertices) < 3 or not np.isfinite(vertices).all():
+        raise InvalidValueError(f"{name} vertices", vertices.shape, "(n, 3) finite positions, n >= 3")
+    if faces.ndim != 2 or faces.shape[1] != 3 or not len(faces) or faces.min() < 0 or faces.max() >= len(vertices):
+        raise InvalidValueError(f"{name} faces", faces.shape, "(m, 3) ids of existing vertices, m > 0")
+    draw = renderer or _bare(faces)
+    with Landmarker(landmarker_model, mode="image") as landmarker:
+        for view, rotation in _views():
+            first = _look(landmarker, vertices, faces, rotation, vertices, draw)
+            if first is None:
+                continue
+            # Closer looks, framed on the face found (a full body or a head with shoulders showed it small), at a
+            # few framings: the mean of their landmarks halves MediaPipe's frame-to-frame jitter.
+            looks = [
+                found
+                for margin in _CLOSE_MARGINS
+                if (found := _look(landmarker, vertices, faces, rotation, _face_box(first[0], rotation, margin), draw))
+            ] or [first]
+            points = np.mean([look[0] for look in looks], axis=0)
+            hits = min(look[1] for look in looks)
+            break
+        else:
+            raise FaceNotFoundError(
+                f"no face found on {name} from any of {len(_VIEWS)} directions: the mesh may not be a head, or "
+                "its face may be hidden (hair or a helmet over it); pass the head mesh alone"
+            )
+    points68 = ibug68(points)
+    interocular = float(np.linalg.norm(points68[45] - points68[36]))
+    unit = _unit(interocular, name)
+    # Axes from the face itself: up from the chin (8) to the nose root (27), left from the subject's right
+    # outer eye corner (36) to the left one (45); forward completes the frame.
+    left = points68[45] - points68[36]
+    up_measured = points68[27] - points68[8]
+    up_measured = up_measured - left * (up_measured @ left) / (left @ left)
+    forward_measured = np.cross(left, up_measured)
+    up, tilt = _snap(up_measured)
+    forward, _ = _snap(forward_measured)
+    if abs(float(up @ forward)) > 0.5:
+        raise InvalidValueError(f"{name} axes", view, "a face whose up and forward axes can be told apart")
+    distances = np.linalg.norm(vertices[None, :, :] - points68[:, None, :], axis=2)
+    return Instrumentation(
+        landmarks478=points.astype(np.float32),
+        ibug68_points=points68.astype(np.float32),
+        ibug68_vertices=np.argmin(distances, axis=1).astype(np.int32),
+        interocular=interocular,
+        unit=unit,
+        up=tuple(float(v) for v in up),  # type: ignore[arg-type]
+        forward=tuple(float(v) for v in forward),  # type: ignore[arg-type]
+        tilt_deg=round(tilt, 2),
+        hits=hits,
+        view=view,
+    )
+
+
+def instrument_cached(
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    file_sha256: str,
+    landmarker_model: str | Path | None = None,
+    name: str = "head",
+) -> Instrumentation:
+    """:func:`instrument`, cached per ``file_sha256`` in ``$MIEN_CACHE_DIR/heads`` (written atomically).
+
+    A cache entry of another :data:`INSTRUMENT_VERSION` or an unreadable one is recomputed, never trusted.
+    """
+    path = cache_dir("heads") / f"{file_sha256}.instrument.json"
+    if path.is_file():
+        try:
+            return Instrumentation.from_json(path.read_text(encoding="utf-8"))
+        except InvalidValueError:
+            pass
+    found = instrument(vertices, faces, landmarker_model, name)
+    write_bytes(found.to_json().encode("utf-8"), path)
+    return found
