@@ -11,11 +11,11 @@ import pytest
 pytest.importorskip("mediapipe", reason="mediapipe not installed (track extra)")
 pytest.importorskip("moderngl", reason="moderngl not installed (render extra)")
 
-from mien.errors import InvalidValueError  # noqa: E402
-from mien.heads import instrument as instrument_module  # noqa: E402
-from mien.heads.instrument import FaceNotFoundError, Instrumentation, instrument, instrument_cached  # noqa: E402
-from mien.rig.builtin_head import builtin_head  # noqa: E402
-from mien.rig.ict_facekit import load_ict_facekit  # noqa: E402
+from mien.errors import InvalidValueError
+from mien.heads import instrument as instrument_module
+from mien.heads.instrument import FaceNotFoundError, Instrumentation, instrument, instrument_cached
+from mien.rig.builtin_head import builtin_head
+from mien.rig.ict_facekit import load_ict_facekit
 
 Z_UP_FACING_MINUS_Y = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 """mien's frame (+y up, +z forward) -> a Blender-style file's (+z up, -y forward)."""
@@ -32,7 +32,7 @@ def _distances_mm(points: np.ndarray, rig) -> np.ndarray:  # type: ignore[no-unt
 
 
 def test_ict_in_its_own_frame_is_found_frontally_in_metres(ict) -> None:  # type: ignore[no-untyped-def]
-    rig, found = ict
+    _, found = ict
     assert found.view == "+z/+y"
     assert found.unit == "m"
     assert found.up == (0.0, 1.0, 0.0) and found.forward == (0.0, 0.0, 1.0)
@@ -74,13 +74,13 @@ def test_the_builtin_head_is_found_too(landmarker_path: Path) -> None:
 
 def test_a_mesh_with_no_face_is_refused_by_name(landmarker_path: Path) -> None:
     sphere = _sphere(0.1)
-    with pytest.raises(FaceNotFoundError, match="no face found on ball.glb"):
+    with pytest.raises(FaceNotFoundError, match=r"no face found on ball\.glb"):
         instrument(*sphere, landmarker_path, name="ball.glb")
 
 
 def test_a_unit_no_human_face_has_is_refused(ict, landmarker_path: Path) -> None:  # type: ignore[no-untyped-def]
     rig, _ = ict
-    with pytest.raises(InvalidValueError, match="giant.glb unit"):
+    with pytest.raises(InvalidValueError, match=r"giant\.glb unit"):
         instrument(rig.neutral * 4.0, rig.faces, landmarker_path, name="giant.glb")
 
 

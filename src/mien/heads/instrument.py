@@ -114,7 +114,7 @@ class Instrumentation:
 
     def to_json(self) -> str:
         """A JSON text of every field (arrays as lists)."""
-        values = {key: value.tolist() if isinstance(value, np.ndarray) else value for key, value in asdict(self).items()}
+        values = {key: v.tolist() if isinstance(v, np.ndarray) else v for key, v in asdict(self).items()}
         return json.dumps({"version": INSTRUMENT_VERSION, **values})
 
     @classmethod
@@ -330,6 +330,7 @@ def instrument(
                 if (found := _look(landmarker, vertices, faces, rotation, _face_box(first[0], rotation, margin), draw))
             ] or [first]
             points = np.mean([look[0] for look in looks], axis=0)
+            found_view = view
             hits = min(look[1] for look in looks)
             break
         else:
@@ -349,7 +350,7 @@ def instrument(
     up, tilt = _snap(up_measured)
     forward, _ = _snap(forward_measured)
     if abs(float(up @ forward)) > 0.5:
-        raise InvalidValueError(f"{name} axes", view, "a face whose up and forward axes can be told apart")
+        raise InvalidValueError(f"{name} axes", found_view, "a face whose up and forward axes can be told apart")
     distances = np.linalg.norm(vertices[None, :, :] - points68[:, None, :], axis=2)
     return Instrumentation(
         landmarks478=points.astype(np.float32),
@@ -361,7 +362,7 @@ def instrument(
         forward=tuple(float(v) for v in forward),  # type: ignore[arg-type]
         tilt_deg=round(tilt, 2),
         hits=hits,
-        view=view,
+        view=found_view,
     )
 
 
