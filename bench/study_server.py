@@ -102,7 +102,7 @@ def start_server(design: Path, db: str) -> tuple[subprocess.Popen[bytes], str]:
     from mien.ports import free_port
 
     port = free_port()
-    command = [sys.executable, "-m", "mien.cli", "study", "serve", str(design), "--db", db, "--port", str(port)]
+    command = [sys.executable, "-m", "mien.cli", "study", "serve", str(design), "--db", db, "--http-port", str(port)]
     process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     url = f"http://127.0.0.1:{port}"
     deadline = time.monotonic() + 60

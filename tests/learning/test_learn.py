@@ -174,7 +174,7 @@ def test_cli_learn_and_laugh(
             str(out),
             "--workers",
             "0",
-            "--model",
+            "--landmarker",
             str(landmarker_path),
             "--method",
             "dba",

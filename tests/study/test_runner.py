@@ -174,12 +174,12 @@ def test_export_and_analyze_commands(study: tuple, tmp_path: Path, capsys: pytes
             assert client.post("/api/answer", json=body).status_code == 200
     out = tmp_path / "answers.csv"
     args = [str(design.path), "--db", str(db), "--stimuli", str(folder)]
-    assert main(["study", "export", *args, "--out", str(out)]) == 0
+    assert main(["study", "export", *args, "-o", str(out)]) == 0
     assert "wrote 132 answers" in capsys.readouterr().out
     frame = read_answers_csv(out)
     assert frame.equals(store.answers_frame("api"))
     report = tmp_path / "report"
-    assert main(["study", "analyze", *args, "--answers", str(out), "--out", str(report)]) == 0
+    assert main(["study", "analyze", *args, "--answers", str(out), "-o", str(report)]) == 0
     assert (report / "report.html").is_file()
     assert main(["study", "analyze", str(design.path), "--db", str(tmp_path / "empty.sqlite")]) == 2
     assert "at least one stored answer" in capsys.readouterr().err
@@ -192,7 +192,7 @@ def test_serve_refuses_clearly(study: tuple, tmp_path: Path, capsys: pytest.Capt
 
     design, _, folder = study
     closed_port = free_port()
-    args = ["study", "serve", str(design.path), "--stimuli", str(folder), "--port", "0"]
+    args = ["study", "serve", str(design.path), "--stimuli", str(folder), "--http-port", "0"]
     assert main([*args, "--db", f"postgresql://postgres@127.0.0.1:{closed_port}/x"]) == 2
     assert "locked or unreachable" in capsys.readouterr().err
     with socket.socket() as busy:
@@ -200,7 +200,7 @@ def test_serve_refuses_clearly(study: tuple, tmp_path: Path, capsys: pytest.Capt
         busy.listen()
         port = busy.getsockname()[1]
         assert main([*args[:-1], str(port)]) == 2
-        assert f"--port={port} is invalid" in capsys.readouterr().err
+        assert f"--http-port={port} is invalid" in capsys.readouterr().err
     assert main([*args[:3], "--stimuli", str(tmp_path)]) == 2
     assert "run `mien study stimuli" in capsys.readouterr().err
 

@@ -56,7 +56,7 @@ class Server:
 
     def __init__(self, design: Path, db: str, port: int) -> None:
         self.command = [sys.executable, "-m", "mien.cli", "study", "serve", str(design), "--db", db,
-                        "--port", str(port)]  # fmt: skip
+                        "--http-port", str(port)]  # fmt: skip
         self.url = f"http://127.0.0.1:{port}"
         self.process: subprocess.Popen[bytes] | None = None
 

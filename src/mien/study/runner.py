@@ -278,7 +278,7 @@ def listen(host: str = "127.0.0.1", port: int = 8000) -> socket.socket:
     from mien.errors import InvalidValueError
 
     if not 0 <= port <= 65535:
-        raise InvalidValueError("--port", port, "a TCP port 0..65535")
+        raise InvalidValueError("--http-port", port, "a TCP port 0..65535")
     sock = socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET, socket.SOCK_STREAM)
     try:
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
@@ -287,7 +287,7 @@ def listen(host: str = "127.0.0.1", port: int = 8000) -> socket.socket:
     except OSError as error:
         sock.close()
         raise InvalidValueError(
-            "--port", port, f"a free port on {host} ({error.strerror}); stop the other server or pick another port"
+            "--http-port", port, f"a free port on {host} ({error.strerror}); stop the other server or pick another port"
         ) from None
     return sock
 
