@@ -42,7 +42,8 @@ def per_frame(frames: int, repeats: int) -> None:
     from mien.render.camera import CAMERA_PRESETS
     from mien.rig.heads import ict_installed, load_head
     from mien.validate.face_detector import FaceDetector
-    from mien.validate.recognition import EXPRESSIONS, peak_face
+    from mien.validate.expressions import EXPRESSIONS
+    from mien.validate.recognition import peak_face
     from mien.validate.stimuli import StimulusRenderer
 
     head = ("ict", "a") if ict_installed() else ("builtin", "default")

@@ -14,10 +14,10 @@ from mien.validate.emotion_classifier import FRAMINGS, face_box
 def _builtin_landmarks(view: str = "frontal-1m", size: int = 512) -> np.ndarray:
     """The built-in head's 68 landmark vertices projected as in the study's frontal view (pixels)."""
     from mien.rig.heads import load_head
-    from mien.validate.recognition import _camera
+    from mien.render.camera import VIEWS
 
     rig = load_head("builtin", "default")
-    return _camera(view).project(rig.neutral[rig.landmarks], size, size)
+    return VIEWS[view].camera.project(rig.neutral[rig.landmarks], size, size)
 
 
 def _fractions(points: np.ndarray, framing: str) -> tuple[float, float, float]:

@@ -90,7 +90,7 @@ def test_on_ict_the_nose_ridge_tells_a_nose_wrinkle_from_a_lip_raise_and_a_raise
 
 def test_only_the_detectors_blind_aus_are_replaced() -> None:
     from mien.facs.catalogue import OPENFACS_AUS
-    from mien.validate.recognition import facs_reading
+    from mien.validate.facs_reading import facs_reading
 
     # what the detector sees of a disgust (lids lifted, a weak lip raise, lips parted: anger's signs, as on Table 1's
     # disgust); the nose wrinkle measured on the mesh, which the detector cannot see, makes it disgust

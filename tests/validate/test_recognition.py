@@ -8,14 +8,8 @@ import pytest
 
 from mien.errors import InvalidValueError, UnknownNameError
 from mien.validate.detector import EMOTION_LABELS
-from mien.validate.recognition import (
-    RecognitionResult,
-    Stimulus,
-    StimulusScore,
-    peak_face,
-    run_recognition,
-    study_stimuli,
-)
+from mien.validate.recognition import peak_face, run_recognition, study_stimuli
+from mien.validate.scores import RecognitionResult, Stimulus, StimulusScore
 
 FIVE = ("joy", "sadness", "anger", "surprise", "fear")
 
@@ -195,7 +189,7 @@ def test_disgust_shows_its_facs_signs(ict_frontal: RecognitionResult) -> None:
 def test_facs_reading_matches_prototypes() -> None:
     from mien.facs.catalogue import OPENFACS_AUS
     from mien.facs.prototypes import EMFACS_PROTOTYPES
-    from mien.validate.recognition import facs_reading
+    from mien.validate.facs_reading import facs_reading
 
     aus = tuple(OPENFACS_AUS)
     neutral = np.full(len(aus), 0.3)
@@ -209,7 +203,7 @@ def test_facs_reading_matches_prototypes() -> None:
 
 def test_facs_reading_takes_the_nose_wrinkle_led_disgust_for_disgust() -> None:
     from mien.facs.catalogue import OPENFACS_AUS
-    from mien.validate.recognition import facs_reading
+    from mien.validate.facs_reading import facs_reading
 
     # what the detector and the mesh's landmarks saw of Table 1's disgust at 1.2 (feature-point basis, mean of
     # the sixteen frontal renders): the lids and brows of anger, the lips parted, and the nose wrinkled hard

@@ -10,14 +10,8 @@ import numpy as np
 import pytest
 
 from mien.errors import InvalidValueError, MissingAssetError, UnknownNameError
-from mien.validate.rig_fidelity import (
-    RigFidelity,
-    fidelity_stats,
-    least_squares_slope,
-    pearson_r,
-    primary_blendshapes,
-    run_rig_fidelity,
-)
+from mien.validate.rig_fidelity import RigFidelity, fidelity_stats, primary_blendshapes, run_rig_fidelity
+from mien.validate.statistics import least_squares_slope, pearson_r
 
 
 def test_pearson_and_slope_match_hand_computed_values() -> None:

@@ -7,8 +7,9 @@ import json
 import numpy as np
 
 from mien.validate.detector import EMOTION_LABELS
-from mien.validate.recognition import RecognitionResult, Stimulus, StimulusScore
-from mien.validate.targets import TARGETS, TargetCheck, check_targets, scorecard_lines, wilson_interval
+from mien.validate.scores import RecognitionResult, Stimulus, StimulusScore
+from mien.validate.statistics import wilson_interval
+from mien.validate.targets import TARGETS, TargetCheck, check_targets, scorecard_lines
 
 
 def _score(

@@ -174,30 +174,43 @@ def _list(text: str, field: str, parse: Any = str) -> list[Any]:
     return values
 
 
-def _detector(args: argparse.Namespace, emotions: bool = True) -> Any:
-    from mien.paths import require_asset
-    from mien.validate.face_detector import FaceDetector
+def _options(args: argparse.Namespace, **study: Any) -> Any:
+    """The library's :class:`~mien.validate.options.ValidateOptions` from the parsed arguments (``study``: the
+    recognition study's conditions, where the command has them)."""
+    from mien.validate.options import ValidateOptions
 
-    require_asset("face_landmarker", args.landmarker)
-    if emotions:
-        require_asset("emotion_model", args.emotion_model)
-    return FaceDetector(args.landmarker, args.emotion_model, emotions=emotions, framing=args.framing)
+    return ValidateOptions(
+        out_dir=Path(args.out),
+        size_px=_size(args),
+        landmarker_path=args.landmarker,
+        emotion_model_path=args.emotion_model,
+        framing=args.framing,
+        show_progress=not args.quiet,
+        human_data_dir=getattr(args, "human_data", None),
+        video_path=getattr(args, "video", None),
+        video_expression=getattr(args, "expression", None) or "joy",
+        **study,
+    )
+
+
+def _detector(args: argparse.Namespace, emotions: bool = True) -> Any:
+    from mien.validate.options import open_detector
+
+    return open_detector(_options(args), emotions)
 
 
 def emotions_result(args: argparse.Namespace, heads: list[tuple[str, str]]) -> Any:
     """Run the recognition study for ``heads`` from the parsed options."""
-    from mien.validate.recognition import EXPRESSIONS, run_recognition, study_stimuli
+    from mien.validate.expressions import EXPRESSIONS
+    from mien.validate.recognition import recognition_study
 
-    bases = [b.replace("-", "_") for b in _list(args.basis, "basis")]
-    views = _list(getattr(args, "views", ",".join(_VIEWS_STUDY)), "views")
-    intensities = _list(getattr(args, "intensities", "1.2,2.4"), "intensities", float)
-    expressions = _list(args.expressions, "expressions") if getattr(args, "expressions", None) else list(EXPRESSIONS)
-    stimuli = study_stimuli(heads, bases, views, intensities, expressions)
-    detector = _detector(args)
-    try:
-        return run_recognition(stimuli, detector, _size(args), keep_images=True, progress=not args.quiet)
-    finally:
-        detector.close()
+    study = {
+        "bases": tuple(b.replace("-", "_") for b in _list(args.basis, "basis")),
+        "views": tuple(_list(args.views, "views")),
+        "intensities": tuple(_list(args.intensities, "intensities", float)),
+        "expressions": tuple(_list(args.expressions, "expressions")) if args.expressions else EXPRESSIONS,
+    }
+    return recognition_study(heads, _options(args, **study))
 
 
 def _percent(value: float) -> str:
@@ -207,22 +220,22 @@ def _percent(value: float) -> str:
 
 def run_emotions(args: argparse.Namespace) -> int:
     """``mien validate emotions``."""
-    from mien.validate.recognition import EXPRESSIONS, write_recognition
-    from mien.validate.targets import check_targets, scorecard_lines
+    from mien.validate.expressions import BASICS, EXPRESSIONS
+    from mien.validate.recognition import write_recognition
+    from mien.validate.targets import FRONTAL, check_targets, scorecard_lines
 
     heads = parse_heads(args.head)
     _check_heads(heads)
     result = emotions_result(args, heads)
     written = write_recognition(result, args.out)
-    basics = ("joy", "sadness", "anger", "surprise", "fear")
     print(f"recognised (top label; blends: top two) over {len(result.scores)} renders, and the FACS reading:")
     for name in ("neutral", *EXPRESSIONS):
         if not result.subset(expression=name):
             continue  # not asked for
         facs = "" if name == "neutral" else f"   FACS reading {_percent(result.facs_rate(expression=name)):>4s}"
         print(f"  {name:13s} {result.rate(expression=name):6.0%}   quality {result.quality(name):.2f}{facs}")
-    frontal = result.rate(expression=basics, view=("frontal-1m", "frontal-3m"))
-    print(f"joy, sadness, anger, surprise, fear, frontal: {_percent(frontal)}")
+    frontal = result.rate(expression=BASICS, view=FRONTAL)
+    print(f"{', '.join(BASICS)}, frontal: {_percent(frontal)}")
     summary = result.framing_summary()
     if len(summary) > 1:
         print("the five (frontal / 45 degrees) and neutral, with the classifier's crop in each framing:")
@@ -301,6 +314,6 @@ def run_report(args: argparse.Namespace) -> int:
         from mien.errors import InvalidValueError
 
         raise InvalidValueError("video", str(args.video), "an existing video file of a person")
-    path = build_report(args, heads)
+    path = build_report(heads, _options(args))
     print(f"wrote {path}")
     return 0

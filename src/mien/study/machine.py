@@ -29,7 +29,7 @@ if TYPE_CHECKING:
     import pandas as pd
 
     from mien.validate.detector import Detector
-    from mien.validate.recognition import RecognitionResult
+    from mien.validate.scores import RecognitionResult
 
 __all__ = ["MachineJudgement", "judge_stimuli", "machine_unavailable"]
 
@@ -63,7 +63,7 @@ class MachineJudgement:
         """
         import pandas as pd
 
-        from mien.validate.recognition import BLEND_COMPONENTS, LABEL_OF
+        from mien.validate.expressions import expected_labels
 
         rows = []
         for expression in dict.fromkeys(s.stimulus.expression for s in self.result.scores):
@@ -71,7 +71,7 @@ class MachineJudgement:
             judged = [s for s in scores if np.all(np.isfinite(s.emotions))]
             tops = Counter(s.top for s in judged)
             top, count = tops.most_common(1)[0] if tops else ("", 0)
-            knows = expression in LABEL_OF or expression in BLEND_COMPONENTS
+            knows = expected_labels(expression) is not None
             recognised = float(np.mean([bool(s.correct()) for s in judged])) if knows and judged else float("nan")
             rows.append(
                 [
@@ -118,7 +118,7 @@ def _canonical(expression: str) -> str:
 
 
 def _stimulus(entry: dict[str, Any]) -> Any:
-    from mien.validate.recognition import Stimulus
+    from mien.validate.scores import Stimulus
 
     conditions = entry.get("conditions", {}) or {}
     view = str(conditions.get("view", conditions.get("laughter_type", "")))
@@ -190,7 +190,7 @@ def judge_stimuli(
     from mien.progress import progress as progress_bar
     from mien.study.stimuli import MANIFEST_NAME, load_manifest
     from mien.validate.detector import EMOTION_LABELS
-    from mien.validate.recognition import RecognitionResult, StimulusScore
+    from mien.validate.scores import RecognitionResult, StimulusScore
 
     if not (np.isfinite(sample_s) and sample_s > 0):
         raise InvalidValueError("sample_s", sample_s, "a positive number of seconds")

@@ -23,6 +23,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from mien.errors import InvalidValueError
+from mien.validate.statistics import pearson
 
 __all__ = [
     "DEFAULT_LENGTH",
@@ -81,29 +82,19 @@ def _check_pair(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return first, second
 
 
-def _pearson(a: np.ndarray, b: np.ndarray, axis: int | None) -> np.ndarray:
-    da = a - a.mean(axis=axis, keepdims=True)
-    db = b - b.mean(axis=axis, keepdims=True)
-    denominator = np.sqrt((da * da).sum(axis=axis) * (db * db).sum(axis=axis))
-    numerator = (da * db).sum(axis=axis)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        r = np.where(denominator > 0, numerator / np.where(denominator > 0, denominator, 1.0), np.nan)
-    return np.clip(r, -1.0, 1.0)
-
-
 def map_correlation(a: np.ndarray, b: np.ndarray) -> float:
     """2D correlation coefficient of two (n_aus, length) maps (MATLAB ``corr2``), in [-1, 1].
 
     NaN when either map is constant (no variance: the correlation is undefined).
     """
     first, second = _check_pair(a, b)
-    return float(_pearson(first.ravel(), second.ravel(), axis=None))
+    return float(pearson(first.ravel(), second.ravel(), axis=None))
 
 
 def row_correlations(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """(n_aus,) Pearson correlation of each AU row of ``a`` with the same row of ``b``; NaN for a constant row."""
     first, second = _check_pair(a, b)
-    return np.asarray(_pearson(first, second, axis=1), dtype=np.float64)
+    return np.asarray(pearson(first, second, axis=1), dtype=np.float64)
 
 
 def correlation_note(a: np.ndarray, b: np.ndarray, what: str = "map") -> str:

@@ -34,7 +34,19 @@ from typing import Any
 
 import numpy as np
 
+from mien.affect.emotions import known_names, resolve_emotion
+from mien.character import Character
 from mien.errors import InvalidValueError, MienError, UnknownNameError
+from mien.facs.catalogue import FACE_CHANNELS
+from mien.facs.clip import Clip
+from mien.facs.envelope import Envelope
+from mien.facs.intensity import parse_au
+from mien.paths import require_asset
+from mien.progress import progress as progress_bar
+from mien.render.camera import camera_from_options
+from mien.rig.au_solve import SOLVED_AUS, AUSolver
+from mien.rig.heads import load_head
+from mien.tracking import track_video
 from mien.validate.activation import (
     DEFAULT_LENGTH,
     MIN_SAMPLES,
@@ -43,13 +55,16 @@ from mien.validate.activation import (
     map_correlation,
     row_correlations,
 )
+from mien.validate.face_detector import MediaPipeDetector
+from mien.validate.figures import plot_comparison
+from mien.validate.json_values import rounded
+from mien.validate.stimuli import StimulusRenderer
 
 __all__ = [
     "MIN_FACE_SHARE",
     "MIN_FRAMES",
     "CompareResult",
     "MapComparison",
-    "plot_comparison",
     "run_compare",
 ]
 
@@ -98,9 +113,9 @@ class MapComparison:
         row_r = self.row_r
         return {
             "name": self.name,
-            "r": _finite_or_none(self.r),
+            "r": rounded(self.r),
             "r_note": self.note,
-            "per_au_r": {f"AU{code}": _finite_or_none(value) for code, value in zip(self.aus, row_r, strict=True)},
+            "per_au_r": {f"AU{code}": rounded(value) for code, value in zip(self.aus, row_r, strict=True)},
             "constant_rows": [f"AU{code}" for code, value in zip(self.aus, row_r, strict=True) if math.isnan(value)],
             "character_face_share": round(self.character_face_share, 4),
             "human_map": np.round(self.human, 4).tolist(),
@@ -209,48 +224,10 @@ class CompareResult:
         return {Path(name).stem: path for name, path in final.items()}
 
 
-def _finite_or_none(value: float) -> float | None:
-    return None if math.isnan(value) else round(float(value), 4)
-
-
 def _slug(name: str) -> str:
     if name == "closed-loop":
         return "closed_loop"
     return "expression_" + "".join(ch if ch.isalnum() else "_" for ch in name.lower()).strip("_")
-
-
-def plot_comparison(comparison: MapComparison, path: str | os.PathLike[str]) -> Path:
-    """A Fig. 5-style PNG: the human's and the character's activation maps side by side, r in the title."""
-    from mien.plot import pyplot
-
-    plt = pyplot()
-    labels = [f"AU{code}" for code in comparison.aus]
-    row_r = comparison.row_r
-    r = comparison.r
-    height = 1.6 + 0.22 * len(labels)
-    fig, axes = plt.subplots(1, 2, figsize=(9.0, height), sharey=True, constrained_layout=True)
-    try:
-        image = None
-        for axis, values, title in zip(
-            axes, (comparison.human, comparison.character), ("human", "character"), strict=True
-        ):
-            image = axis.imshow(values, aspect="auto", cmap="inferno", vmin=0.0, vmax=5.0, interpolation="nearest")
-            axis.set_title(title)
-            axis.set_xlabel("time (% of clip)")
-            n = values.shape[1]
-            axis.set_xticks(np.linspace(0, n - 1, 5), [f"{p:.0f}" for p in np.linspace(0, 100, 5)])
-        axes[0].set_yticks(range(len(labels)), labels)
-        right = axes[1].secondary_yaxis("right")
-        right.set_yticks(range(len(labels)), ["" if math.isnan(v) else f"{v:+.2f}" for v in row_r], fontsize=7)
-        right.set_ylabel("r per AU")
-        fig.colorbar(image, ax=axes, shrink=0.8, label="intensity (0..5)", pad=0.02)
-        r_text = "undefined" if math.isnan(r) else f"{r:.2f}"
-        fig.suptitle(f"{comparison.name}  (r = {r_text})")
-        out = Path(path)
-        fig.savefig(out, format="png", dpi=110)
-    finally:
-        plt.close(fig)
-    return out
 
 
 # ---------------------------------------------------------------------------------------------- running
@@ -258,8 +235,6 @@ def plot_comparison(comparison: MapComparison, path: str | os.PathLike[str]) -> 
 
 def _expression_player(expression: str, intensity: float) -> Callable[[Any, Any], None]:
     """A function ``(character, envelope) -> None`` starting ``expression`` at t = 0."""
-    from mien.affect.emotions import known_names, resolve_emotion
-
     names = known_names()
     try:
         emotion = resolve_emotion(expression)
@@ -271,8 +246,6 @@ def _expression_player(expression: str, intensity: float) -> Callable[[Any, Any]
             character.emote(emotion, intensity, start_s=0.0, envelope=envelope)
 
         return emote
-    from mien.facs.intensity import parse_au
-
     parts = [p for p in expression.replace(",", "+").replace(" ", "+").split("+") if p]
     try:
         specs = [parse_au(part) for part in parts]
@@ -321,11 +294,9 @@ def _detected_aus(
     show_progress: bool,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Render (n, 62) face frames, detect each; ``(aus (k, n_aus), times (k,))`` of the frames with a face."""
-    from mien.progress import progress
-
     scores: list[np.ndarray] = []
     kept: list[float] = []
-    for frame, time_s in progress(zip(frames, times_s, strict=True), len(frames), desc, show_progress):
+    for frame, time_s in progress_bar(zip(frames, times_s, strict=True), len(frames), desc, show_progress):
         rgb, hint = renderer.render(frame)
         detection = detector.detect(rgb, hint)
         if detection.found and detection.blendshapes is not None and not detection.landmarks_from_hint:
@@ -370,17 +341,6 @@ def run_compare(
     on too few frames or is too short, :class:`MissingAssetError` for a missing model or head asset, and
     :class:`UnknownNameError` for an unknown head, identity, camera or expression.
     """
-    from mien.character import Character
-    from mien.facs.catalogue import FACE_CHANNELS
-    from mien.facs.clip import Clip
-    from mien.facs.envelope import Envelope
-    from mien.paths import require_asset
-    from mien.render.camera import camera_from_options
-    from mien.rig.au_solve import SOLVED_AUS, AUSolver
-    from mien.rig.heads import load_head
-    from mien.tracking import track_video
-    from mien.validate.stimuli import StimulusRenderer
-
     started = time.perf_counter()
     timings: dict[str, float] = {}
     if int(length) != length or length < MIN_SAMPLES:
@@ -414,8 +374,6 @@ def run_compare(
 
     own_detector = detector is None
     if detector is None:
-        from mien.validate.face_detector import MediaPipeDetector
-
         detector = MediaPipeDetector(model)
     expression_result: MapComparison | None = None
     try:

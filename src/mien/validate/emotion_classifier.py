@@ -22,8 +22,10 @@ from typing import Any
 
 import numpy as np
 
-from mien.errors import InvalidValueError, MissingExtraError, UnknownNameError
+from mien.errors import InvalidValueError, UnknownNameError
+from mien.extras import require
 from mien.paths import require_asset
+from mien.tracking.ibug68 import ibug68
 from mien.validate.detector import EMOTION_LABELS
 
 __all__ = ["CROP_SCALE", "FRAMINGS", "EmotionClassifier", "crop_square", "face_box", "face_crop"]
@@ -52,8 +54,6 @@ def face_box(landmarks: np.ndarray, framing: str = "landmarks") -> tuple[int, in
     scale, raise_by = _framing(framing)
     points = np.asarray(landmarks, dtype=np.float64)[:, :2]
     if len(points) >= 468:
-        from mien.tracking.ibug68 import ibug68
-
         points = ibug68(points)
     if not np.all(np.isfinite(points)):
         raise InvalidValueError("landmarks", "non-finite coordinates", "finite pixel coordinates")
@@ -90,12 +90,11 @@ def face_crop(rgb: np.ndarray, landmarks: np.ndarray, framing: str = "landmarks"
 
     Pixels outside the image are edge-replicated; the grey is ITU-R BT.601 luma, as OpenCV's ``COLOR_RGB2GRAY``.
     """
-    from PIL import Image
-
+    image = require("PIL.Image", "render")
     grey = rgb[..., :3].astype(np.float32) @ np.array([0.299, 0.587, 0.114], np.float32)
     patch = crop_square(grey, face_box(landmarks, framing))
-    resized = Image.fromarray(np.clip(patch + 0.5, 0, 255).astype(np.uint8)).resize(
-        (size, size), Image.Resampling.BILINEAR
+    resized = image.fromarray(np.clip(patch + 0.5, 0, 255).astype(np.uint8)).resize(
+        (size, size), image.Resampling.BILINEAR
     )
     return np.asarray(resized, dtype=np.float32) / 255.0
 
@@ -113,12 +112,9 @@ class EmotionClassifier:
         _framing(framing)
         self.framing = framing
         self.model_path: Path = require_asset("emotion_model", model)
+        interpreter = require("ai_edge_litert.interpreter", "validate")
         try:
-            from ai_edge_litert.interpreter import Interpreter
-        except ImportError:
-            raise MissingExtraError("ai-edge-litert", "validate") from None
-        try:
-            self._interpreter: Any = Interpreter(model_path=str(self.model_path), num_threads=1)
+            self._interpreter: Any = interpreter.Interpreter(model_path=str(self.model_path), num_threads=1)
             self._interpreter.allocate_tensors()
         except (RuntimeError, ValueError) as exc:
             expected = f"a TFLite emotion classifier ({exc})"

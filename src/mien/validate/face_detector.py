@@ -12,6 +12,8 @@ import os
 
 import numpy as np
 
+from mien.errors import InvalidValueError
+from mien.tracking.landmarker import Landmarker
 from mien.validate.detector import Detection
 from mien.validate.emotion_classifier import EmotionClassifier
 
@@ -24,16 +26,12 @@ class MediaPipeDetector:
     name = "mediapipe-face-landmarker"
 
     def __init__(self, model: str | os.PathLike[str] | None = None, min_confidence: float = 0.5) -> None:
-        from mien.tracking.landmarker import Landmarker
-
         self._landmarker: Landmarker | None = Landmarker(model, mode="image", min_confidence=min_confidence)
         self.model_path = self._landmarker.model_path
 
     def detect(self, rgb: np.ndarray, hint: np.ndarray | None = None) -> Detection:
         """Landmarks and blendshapes on ``rgb``; ``hint`` is ignored (MediaPipe finds the face itself)."""
         if self._landmarker is None:
-            from mien.errors import InvalidValueError
-
             raise InvalidValueError("detector", "closed", "an open detector")
         result = self._landmarker.detect(rgb)
         if result is None:

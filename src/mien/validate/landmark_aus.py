@@ -31,6 +31,10 @@ from typing import Any
 
 import numpy as np
 
+from mien.extras import require
+from mien.facs.catalogue import FACE_CHANNELS, au_channels
+from mien.rig.deform import Deformer
+
 __all__ = [
     "FROM_LANDMARKS",
     "LANDMARK_POINTS",
@@ -86,9 +90,6 @@ class LandmarkAUs:
     """
 
     def __init__(self, rig: Any, weights_of: Any) -> None:
-        from mien.facs.catalogue import FACE_CHANNELS, au_channels
-        from mien.rig.deform import Deformer
-
         self._landmarks = np.asarray(rig.landmarks)
         self._neutral = self._heights(np.asarray(rig.neutral, np.float64))
         deformer = Deformer(rig)
@@ -125,8 +126,7 @@ class LandmarkAUs:
         read as a nose wrinkle. An AU the rig itself cannot raise its own measure with by :data:`MIN_RISE_AT_E_MM`
         is left out of the solve and of the result.
         """
-        from scipy.optimize import nnls
-
+        nnls = require("scipy.optimize", "validate").nnls
         if not any(self._usable[i] for i, name in enumerate(MEASURED_BY) if name in REPORTED):
             return {}
         rise = self._rise(vertices)

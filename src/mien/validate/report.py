@@ -10,23 +10,36 @@ complete-looking report.
 
 from __future__ import annotations
 
-import argparse
 import hashlib
 import html
+import json
 import platform
 import time
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from mien.facs.catalogue import OPENFACS_AUS
+from mien.facs.prototypes import PROTOTYPES_VERSION
 from mien.htmlpage import STYLE as _STYLE
 from mien.htmlpage import img as _img
 from mien.htmlpage import library_versions
 from mien.htmlpage import num as _num
 from mien.htmlpage import pct as _pct
 from mien.htmlpage import table as _table
+from mien.paths import asset_path
+from mien.rig.mapping import AUMapping
+from mien.validate.compare import CompareResult, run_compare
+from mien.validate.expressions import BASICS, EXPRESSIONS, HUMAN_QUALITY
+from mien.validate.options import ValidateOptions, open_detector
+from mien.validate.recognition import recognition_study, write_recognition
+from mien.validate.rig_fidelity import RigFidelity, run_rig_fidelity
+from mien.validate.scores import RecognitionResult
+from mien.validate.targets import FRONTAL, LATERAL, OBLIQUE, TargetCheck, check_targets
+from mien.version import __version__
 
 __all__ = ["build_report", "environment", "render_html"]
 
@@ -45,10 +58,6 @@ def _sha256(path: str | Path | None) -> str:
 
 def environment(models: Mapping[str, str | None]) -> dict[str, Any]:
     """Versions of mien, its tables, the libraries, and the models (path, bytes, SHA-256)."""
-    from mien.facs.prototypes import PROTOTYPES_VERSION
-    from mien.rig.mapping import AUMapping
-    from mien.version import __version__
-
     libraries = library_versions(_LIBRARIES)
     return {
         "mien": __version__,
@@ -69,9 +78,7 @@ def environment(models: Mapping[str, str | None]) -> dict[str, Any]:
     }
 
 
-def _emotions_section(result: Any, folder: Path) -> str:
-    from mien.validate.recognition import EXPRESSIONS, HUMAN_QUALITY
-
+def _emotions_section(result: RecognitionResult, folder: Path) -> str:
     groups = sorted({(s.stimulus.head, s.stimulus.identity, s.stimulus.basis) for s in result.scores})
     views = sorted({s.stimulus.view for s in result.scores})
     header = [
@@ -91,10 +98,6 @@ def _emotions_section(result: Any, folder: Path) -> str:
                 "" if name == "neutral" else _pct(result.facs_rate(expression=name)),
             ]
         )
-    basics = ("joy", "sadness", "anger", "surprise", "fear")
-    frontal = ("frontal-1m", "frontal-3m")
-    oblique = tuple(v for v in views if v.startswith("oblique"))
-    lateral = tuple(v for v in views if v.startswith("lateral"))
     took_anger = result.label_rate("angry", expression="disgust")
     lines = [
         "<h2>Emotion recognition (Broekens study conditions)</h2>",
@@ -107,10 +110,10 @@ def _emotions_section(result: Any, folder: Path) -> str:
         "disgust, which the classifier almost never names.</p>",
         "<ul>",
         "<li>joy, sadness, anger, surprise, fear, frontal (target 90%): "
-        f"<b>{_pct(result.rate(expression=basics, view=frontal))}</b></li>",
-        f"<li>the same at 45 degrees (target 75%): <b>{_pct(result.rate(expression=basics, view=oblique))}</b></li>",
+        f"<b>{_pct(result.rate(expression=BASICS, view=FRONTAL))}</b></li>",
+        f"<li>the same at 45 degrees (target 75%): <b>{_pct(result.rate(expression=BASICS, view=OBLIQUE))}</b></li>",
         f"<li>the same in the 90-degree profile (crop from the rig's projected landmarks): "
-        f"<b>{_pct(result.rate(expression=basics, view=lateral))}</b></li>",
+        f"<b>{_pct(result.rate(expression=BASICS, view=LATERAL))}</b></li>",
         f"<li>neutral reads neutral: <b>{_pct(result.rate(expression='neutral'))}</b>; disgust taken for anger: "
         f"<b>{_pct(took_anger)}</b> by the classifier, <b>{_pct(result.facs_rate('anger', expression='disgust'))}"
         "</b> by the FACS reading (disgust read as disgust by its FACS signs: "
@@ -137,16 +140,14 @@ def _emotions_section(result: Any, folder: Path) -> str:
     return "\n".join(lines)
 
 
-def _targets_table(result: Any) -> str:
+def _targets_table(result: RecognitionResult) -> str:
     """The targets (:mod:`mien.validate.targets`) per head and identity: each figure met or missed, with the
     renders judged and its 95% interval."""
-    from mien.validate.targets import check_targets
-
     checks = check_targets(result)
     heads = list(dict.fromkeys(c.head for c in checks))
     marks = {True: " &#10003;", False: " <b>&#10007;</b>", None: ""}
 
-    def cell(check: Any) -> str:
+    def cell(check: TargetCheck) -> str:
         if check.met is None:
             return _pct(check.value)
         low, high = check.interval
@@ -166,7 +167,7 @@ def _targets_table(result: Any) -> str:
     )
 
 
-def _framing_item(result: Any) -> str:
+def _framing_item(result: RecognitionResult) -> str:
     """The five and neutral with the classifier's crop in each framing (empty with one framing)."""
     summary = result.framing_summary()
     if len(summary) < 2:
@@ -183,7 +184,7 @@ def _framing_item(result: Any) -> str:
     )
 
 
-def _rig_section(result: Any, folder: Path) -> str:
+def _rig_section(result: RigFidelity, folder: Path) -> str:
     lines = [
         "<h2>Rig fidelity (each AU alone at A..E, commanded vs detected)</h2>",
         "<p>Detected AUs come from the detector's blendshape scores through the AU->ARKit mapping solved in "
@@ -217,7 +218,7 @@ def _rig_section(result: Any, folder: Path) -> str:
     return "\n".join(lines)
 
 
-def _compare_section(result: Any, folder: Path) -> str:
+def _compare_section(result: CompareResult, folder: Path) -> str:
     lines = [
         "<h2>Human video vs character (OpenFACS, Fig. 5)</h2>",
         f"<p>Video <code>{html.escape(result.video)}</code>, {result.duration_s:.2f} s at {result.fps:g} fps, face on "
@@ -240,8 +241,6 @@ def render_html(
     sections: list[str], env: dict[str, Any], timings: dict[str, float], heads: list[tuple[str, str]]
 ) -> str:
     """The report page: a header with heads, versions and timings, then ``sections`` (HTML fragments)."""
-    import json
-
     head_list = ", ".join(f"{h}:{i}" for h, i in heads)
     stage_rows = [[html.escape(k), f"{v:.1f}"] for k, v in timings.items()]
     return (
@@ -259,25 +258,24 @@ def render_html(
     )
 
 
-def build_report(args: argparse.Namespace, heads: list[tuple[str, str]]) -> Path:
-    """Run every stage for ``heads`` (options from ``mien validate report``) and write ``report.html``."""
-    from mien.commands.validate import _detector, _size, emotions_result
-    from mien.facs.catalogue import OPENFACS_AUS
-    from mien.paths import asset_path
-    from mien.validate.recognition import write_recognition
-    from mien.validate.rig_fidelity import run_rig_fidelity
+def build_report(heads: Sequence[tuple[str, str]], options: ValidateOptions) -> Path:
+    """Run every stage for ``heads`` under ``options`` and write ``report.html`` into ``options.out_dir``.
 
-    out = Path(args.out)
+    The recognition study always covers both bases; with :attr:`~ValidateOptions.video_path` the human comparison
+    runs on the first head.
+    """
+    out = Path(options.out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    heads = list(heads)
     timings: dict[str, float] = {}
     sections: list[str] = []
 
     started = time.perf_counter()
-    detector = _detector(args, emotions=False)
+    detector = open_detector(options, emotions=False)
     try:
         rig = run_rig_fidelity(
-            heads, list(OPENFACS_AUS), size=_size(args), detector=detector, progress=not args.quiet,
-            human_data=getattr(args, "human_data", None),
+            heads, list(OPENFACS_AUS), size=options.size_px, detector=detector, progress=options.show_progress,
+            human_data=options.human_data_dir,
         )  # fmt: skip
     finally:
         detector.close()
@@ -286,20 +284,17 @@ def build_report(args: argparse.Namespace, heads: list[tuple[str, str]]) -> Path
     sections.append(_rig_section(rig, out / "rig"))
 
     started = time.perf_counter()
-    args.basis = "facs,feature-points"
-    emotions = emotions_result(args, heads)
+    emotions = recognition_study(heads, replace(options, bases=("facs", "feature_points")))
     write_recognition(emotions, out / "emotions")
     timings["emotion recognition"] = time.perf_counter() - started
     sections.insert(0, _emotions_section(emotions, out / "emotions"))
 
-    if getattr(args, "video", None) is not None:
-        from mien.validate.compare import run_compare
-
+    if options.video_path is not None:
         started = time.perf_counter()
         head, identity = heads[0]
         compare = run_compare(
-            args.video, args.expression, head=head, identity=identity, size=_size(args),
-            progress=not args.quiet, landmarker=args.landmarker,
+            options.video_path, options.video_expression, head=head, identity=identity, size=options.size_px,
+            progress=options.show_progress, landmarker=options.landmarker_path,
         )  # fmt: skip
         compare.write(out / "compare")
         timings["human comparison"] = time.perf_counter() - started
@@ -307,8 +302,8 @@ def build_report(args: argparse.Namespace, heads: list[tuple[str, str]]) -> Path
 
     timings["total"] = sum(timings.values())
     models = {
-        "face_landmarker": str(asset_path("face_landmarker", args.landmarker) or ""),
-        "emotion_model": str(asset_path("emotion_model", args.emotion_model) or ""),
+        "face_landmarker": str(asset_path("face_landmarker", options.landmarker_path) or ""),
+        "emotion_model": str(asset_path("emotion_model", options.emotion_model_path) or ""),
     }
     page = render_html(sections, environment(models), timings, heads)
     partial = out / ".report.html.partial"

@@ -36,7 +36,8 @@ when the largest range (max - min) of a primary blendshape score over those face
 
 The human data available is small: one clip of one person going from neutral into a broad smile with a blink,
 and two photographs of smiles. Which AUs it performs was coded by eye from the frames
-(:data:`HUMAN_DATA_AUS`: AU6, AU12, AU25 throughout, AU45 in the clip). Per AU, ``seen_on_human`` is
+(:data:`~mien.validate.human_evidence.HUMAN_DATA_AUS`: AU6, AU12, AU25 throughout, AU45 in the clip). Per AU,
+``seen_on_human`` is
 
 * ``"yes"``: the human data performs the AU and its primary blendshapes move there;
 * ``"no"``: the human data performs the AU and they do not move (the detector misses it on real faces);
@@ -62,18 +63,29 @@ from typing import Any
 import numpy as np
 
 from mien.errors import InvalidValueError, MissingAssetError, UnknownNameError
+from mien.extras import require
+from mien.facs.arkit import ARKIT_NAMES
+from mien.facs.catalogue import ACTION_UNITS, FACE_CHANNELS, OPENFACS_AUS, au_channels
+from mien.paths import require_asset
+from mien.progress import progress as progress_bar
+from mien.render.camera import camera_from_options
+from mien.render.contact_sheet import contact_sheet
+from mien.render.video import write_png
+from mien.rig.au_solve import AUSolver
+from mien.rig.heads import HEADS, ict_installed, load_head
+from mien.validate.face_detector import MediaPipeDetector
+from mien.validate.figures import plot_crosstalk, plot_scatter
+from mien.validate.human_evidence import HumanEvidence, default_human_folder, human_evidence
+from mien.validate.json_values import array_of, rounded, rounded_array, unrounded
+from mien.validate.statistics import least_squares_slope, pearson_r
+from mien.validate.stimuli import StimulusRenderer
 
 __all__ = [
-    "HUMAN_DATA_AUS",
     "MIN_RESPONSE",
     "MOVE_THRESHOLD",
     "HeadFidelity",
-    "HumanEvidence",
     "RigFidelity",
     "fidelity_stats",
-    "human_evidence",
-    "least_squares_slope",
-    "pearson_r",
     "primary_blendshapes",
     "run_rig_fidelity",
 ]
@@ -88,65 +100,6 @@ below it the series is detector noise and r is NaN."""
 PRIMARY_SHARE = 0.5
 """A target is one of an AU's primary blendshapes when its mapping weight is at least this share of the AU's
 largest weight."""
-
-HUMAN_DATA_AUS: dict[str, tuple[int, ...]] = {
-    "video/single_face.mp4": (6, 12, 25, 45),
-    "images/single_face.jpg": (6, 12, 25),
-    "images/multi_face.jpg": (6, 12, 25),
-}
-"""AUs each shared human medium performs, coded by eye from its frames by a mien developer (not a certified FACS
-coder): the clip goes from neutral into a Duchenne smile with parted lips and teeth shown (AU6+12+25) and blinks
-once (AU45, frame 27); the photographs show open-mouthed smiles (AU6+12+25). Paths are relative to the shared
-data folder."""
-
-_TILES = 3
-"""``multi_face.jpg``: the landmarker finds one face per call, so the image is scanned in vertical strips a
-third of its width wide at half-strip steps; faces found twice are kept once."""
-
-
-# ---------------------------------------------------------------------------------------------- statistics
-
-
-def pearson_r(x: np.ndarray, y: np.ndarray) -> float:
-    """Pearson correlation of the finite pairs of ``x`` and ``y`` ((n,) each); NaN when fewer than 3 pairs or
-    either is constant.
-
-    >>> round(pearson_r(np.array([0.0, 1, 2, 3]), np.array([0.0, 2, 4, 7])), 4)
-    0.9944
-    """
-    x, y = _finite_pairs(x, y)
-    if len(x) < 3:
-        return math.nan
-    dx, dy = x - x.mean(), y - y.mean()
-    denominator = math.sqrt(float(dx @ dx) * float(dy @ dy))
-    if denominator <= 1e-12:
-        return math.nan
-    return float(dx @ dy) / denominator
-
-
-def least_squares_slope(x: np.ndarray, y: np.ndarray) -> float:
-    """Least-squares slope (with an intercept) of ``y`` on ``x`` over their finite pairs; NaN when fewer than 2
-    pairs or ``x`` is constant.
-
-    >>> least_squares_slope(np.array([0.0, 1, 2, 3]), np.array([0.0, 2, 4, 7]))
-    2.3
-    """
-    x, y = _finite_pairs(x, y)
-    if len(x) < 2:
-        return math.nan
-    dx = x - x.mean()
-    spread = float(dx @ dx)
-    if spread <= 1e-12:
-        return math.nan
-    return float(dx @ (y - y.mean())) / spread
-
-
-def _finite_pairs(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    x = np.asarray(x, dtype=np.float64)
-    y = np.asarray(y, dtype=np.float64)
-    keep = np.isfinite(x) & np.isfinite(y)
-    return x[keep], y[keep]
-
 
 def fidelity_stats(
     intensities: Sequence[float],
@@ -222,55 +175,6 @@ def _range(values: np.ndarray, columns: np.ndarray) -> float:
 
 
 # ---------------------------------------------------------------------------------------------- results
-
-
-@dataclass(frozen=True, eq=False)
-class HumanEvidence:
-    """How much MediaPipe's blendshapes move on the real human faces available."""
-
-    folder: str | None
-    """The human data folder measured (absolute), or None when none was available."""
-    sources: dict[str, int] = field(default_factory=dict)
-    """Faces measured per medium (path relative to :attr:`folder`): frames with a face, or faces found."""
-    performed: tuple[int, ...] = ()
-    """AUs the measured media perform (:data:`HUMAN_DATA_AUS` of the media with a face)."""
-    blendshape_range: np.ndarray = field(default_factory=lambda: np.full(52, np.nan))
-    """(52,) range (max - min) of each ARKit blendshape score over all human faces; NaN without faces."""
-    blendshapes: np.ndarray = field(default_factory=lambda: np.zeros((0, 52)))
-    """(n_faces, 52) the scores themselves (video frames first, then image faces)."""
-
-    @property
-    def n_faces(self) -> int:
-        """Faces measured (video frames with a face plus faces in images)."""
-        return sum(self.sources.values())
-
-    def to_dict(self) -> dict[str, Any]:
-        """Plain-dict form (ranges by ARKit name, rounded to 1e-4; the per-face scores are left out)."""
-        from mien.facs.arkit import ARKIT_NAMES
-
-        return {
-            "folder": self.folder,
-            "sources": dict(self.sources),
-            "n_faces": self.n_faces,
-            "performed": [f"AU{code}" for code in self.performed],
-            "performed_source": "coded by eye from the frames (mien.validate.rig_fidelity.HUMAN_DATA_AUS)",
-            "blendshape_range": {
-                name: _num(value) for name, value in zip(ARKIT_NAMES, self.blendshape_range, strict=True)
-            },
-        }
-
-    @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> HumanEvidence:
-        """Inverse of :meth:`to_dict` (without the per-face scores)."""
-        from mien.facs.arkit import ARKIT_NAMES
-
-        ranges = data["blendshape_range"]
-        return cls(
-            folder=data["folder"],
-            sources={str(k): int(v) for k, v in data["sources"].items()},
-            performed=tuple(_au_code(name) for name in data["performed"]),
-            blendshape_range=np.array([_nan(ranges[name]) for name in ARKIT_NAMES]),
-        )
 
 
 @dataclass(frozen=True, eq=False)
@@ -371,20 +275,18 @@ class HeadFidelity:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-dict form (NaN as None; values rounded to 1e-4)."""
-        from mien.facs.arkit import ARKIT_NAMES
-
         stats = self._stats()
         per_au = {}
         for i, code in enumerate(self.aus):
             per_au[f"AU{code}"] = {
-                "r": _num(stats["r"][i]),
-                "slope": _num(stats["slope"][i]),
+                "r": rounded(stats["r"][i]),
+                "slope": rounded(stats["slope"][i]),
                 "strongest": bool(stats["strongest"][i]),
-                "detected_at_top": _num(self.detected[i, -1, self.detected_aus.index(code)]),
+                "detected_at_top": rounded(self.detected[i, -1, self.detected_aus.index(code)]),
                 "leaks": {f"AU{c}": round(v, 4) for c, v in self.leaks()[i]},
                 "primary_blendshapes": list(self.primary[i]),
-                "rig_range": _num(self.rig_range[i]),
-                "human_range": _num(self.human_range[i]),
+                "rig_range": rounded(self.rig_range[i]),
+                "human_range": rounded(self.human_range[i]),
                 "seen_on_rig": bool(self.seen_on_rig[i]),
                 "seen_on_human": self.seen_on_human[i],
                 "not_seen": bool(self.not_seen[i]),
@@ -398,14 +300,14 @@ class HeadFidelity:
             "intensities": list(self.intensities),
             "subtract_neutral": self.subtract_neutral,
             "crosstalk_kind": "least-squares slope of each detected AU (column) on the commanded AU's intensity (row)",
-            "strongest_share": _num(self.strongest_share),
+            "strongest_share": rounded(self.strongest_share),
             "per_au": per_au,
-            "neutral": _arr(self.neutral),
-            "detected": _arr(self.detected),
-            "crosstalk": _arr(stats["crosstalk"]),
+            "neutral": rounded_array(self.neutral),
+            "detected": rounded_array(self.detected),
+            "crosstalk": rounded_array(stats["crosstalk"]),
             "blendshape_names": list(ARKIT_NAMES),
-            "neutral_blendshapes": _arr(self.neutral_blendshapes),
-            "blendshapes": _arr(self.blendshapes),
+            "neutral_blendshapes": rounded_array(self.neutral_blendshapes),
+            "blendshapes": rounded_array(self.blendshapes),
             "timings_s": {key: round(value, 4) for key, value in self.timings_s.items()},
         }
 
@@ -421,12 +323,12 @@ class HeadFidelity:
             aus=aus,
             detected_aus=tuple(_au_code(name) for name in data["detected_aus"]),
             intensities=tuple(float(v) for v in data["intensities"]),
-            neutral=_unarr(data["neutral"]),
-            detected=_unarr(data["detected"]).reshape(len(aus), len(data["intensities"]), -1),
-            neutral_blendshapes=_unarr(data["neutral_blendshapes"]),
-            blendshapes=_unarr(data["blendshapes"]).reshape(len(aus), len(data["intensities"]), -1),
-            rig_range=np.array([_nan(per_au[f"AU{c}"]["rig_range"]) for c in aus]),
-            human_range=np.array([_nan(per_au[f"AU{c}"]["human_range"]) for c in aus]),
+            neutral=array_of(data["neutral"]),
+            detected=array_of(data["detected"]).reshape(len(aus), len(data["intensities"]), -1),
+            neutral_blendshapes=array_of(data["neutral_blendshapes"]),
+            blendshapes=array_of(data["blendshapes"]).reshape(len(aus), len(data["intensities"]), -1),
+            rig_range=np.array([unrounded(per_au[f"AU{c}"]["rig_range"]) for c in aus]),
+            human_range=np.array([unrounded(per_au[f"AU{c}"]["human_range"]) for c in aus]),
             seen_on_human=tuple(per_au[f"AU{c}"]["seen_on_human"] for c in aus),
             primary=tuple(tuple(per_au[f"AU{c}"]["primary_blendshapes"]) for c in aus),
             subtract_neutral=bool(data["subtract_neutral"]),
@@ -513,8 +415,6 @@ class RigFidelity:
         Files are written under temporary names and renamed at the end (the JSON last), so a failure never
         leaves a complete-looking result.
         """
-        from mien.render.video import write_png
-
         folder = Path(out_dir)
         folder.mkdir(parents=True, exist_ok=True)
         final: dict[str, Path] = {}
@@ -542,25 +442,6 @@ class RigFidelity:
         return {Path(name).stem: path for name, path in final.items()}
 
 
-def _num(value: float) -> float | None:
-    value = float(value)
-    return None if math.isnan(value) else round(value, 4)
-
-
-def _nan(value: float | None) -> float:
-    return math.nan if value is None else float(value)
-
-
-def _arr(values: np.ndarray) -> Any:
-    rounded = np.round(np.asarray(values, dtype=np.float64), 4).astype(object)
-    rounded[np.isnan(np.asarray(values, dtype=np.float64))] = None
-    return rounded.tolist()
-
-
-def _unarr(values: Any) -> np.ndarray:
-    return np.array(values, dtype=np.float64)  # None -> nan
-
-
 def _fmt(value: float) -> str:
     return "-" if math.isnan(float(value)) else f"{float(value):.2f}"
 
@@ -573,167 +454,17 @@ def _slug(label: str) -> str:
     return "".join(ch if ch.isalnum() else "_" for ch in label.lower())
 
 
-# ---------------------------------------------------------------------------------------------- figures
-
-
 def _sheet(head: HeadFidelity) -> np.ndarray:
-    from mien.render.contact_sheet import contact_sheet
-
     top = head.intensities[-1]
     letter = "ABCDE"[round(top) - 1] if float(top).is_integer() and 1 <= top <= 5 else f"{top:g}"
     labels = ["neutral", *(f"AU{code}{letter}" for code in head.aus)]
     return contact_sheet(list(head.sheet_images), labels, columns=min(7, len(labels)))
 
 
-def plot_scatter(head: HeadFidelity, path: str | os.PathLike[str]) -> Path:
-    """A grid of commanded vs detected intensity per commanded AU (its own AU, and its largest leak)."""
-    from mien.plot import pyplot
-
-    plt = pyplot()
-    n = len(head.aus)
-    columns = min(6, n)
-    rows = math.ceil(n / columns)
-    fig, axes = plt.subplots(rows, columns, figsize=(2.3 * columns, 2.3 * rows + 0.6), squeeze=False)
-    levels = np.array([0.0, *head.intensities])
-    stats = head._stats()
-    leaks = head.leaks(threshold=0.0)
-    try:
-        for i, axis in enumerate(axes.flat):
-            if i >= n:
-                axis.axis("off")
-                continue
-            code = head.aus[i]
-            own = head.detected_aus.index(code)
-            axis.plot([0, 5], [0, 5], color="0.75", linestyle="--", linewidth=0.8)
-            own_y = np.concatenate([[head.neutral[own]], head.detected[i, :, own]])
-            axis.plot(levels, own_y, "o-", color="tab:blue", markersize=4, linewidth=1.2, label=f"AU{code}")
-            if leaks[i]:
-                other = head.detected_aus.index(leaks[i][0][0])
-                other_y = np.concatenate([[head.neutral[other]], head.detected[i, :, other]])
-                axis.plot(
-                    levels, other_y, "s:", color="tab:red", markersize=3, linewidth=1.0, label=f"AU{leaks[i][0][0]}"
-                )
-            axis.set_xlim(-0.3, 5.3)
-            axis.set_ylim(-0.3, 5.3)
-            axis.set_title(f"AU{code}  r {_fmt(stats['r'][i])}  s {_fmt(stats['slope'][i])}", fontsize=9)
-            axis.tick_params(labelsize=7)
-            axis.legend(fontsize=6, loc="upper left", frameon=False)
-            if i % columns == 0:
-                axis.set_ylabel("detected", fontsize=8)
-            if i // columns == rows - 1:
-                axis.set_xlabel("commanded (0..5)", fontsize=8)
-        fig.suptitle(
-            f"{head.label}: commanded vs detected AU intensity (blue: own AU, red: largest other AU)", fontsize=10
-        )
-        fig.tight_layout()
-        out = Path(path)
-        fig.savefig(out, format="png", dpi=100)
-    finally:
-        plt.close(fig)
-    return out
-
-
-def plot_crosstalk(head: HeadFidelity, path: str | os.PathLike[str]) -> Path:
-    """Heatmap of the cross-talk slopes (rows: commanded AU; columns: detected AU; values annotated >= 0.1)."""
-    from mien.plot import pyplot
-
-    plt = pyplot()
-    matrix = head.crosstalk
-    fig, axis = plt.subplots(figsize=(1.2 + 0.42 * len(head.detected_aus), 1.4 + 0.36 * len(head.aus)))
-    try:
-        image = axis.imshow(matrix, cmap="RdBu_r", vmin=-1.2, vmax=1.2, aspect="auto", interpolation="nearest")
-        axis.set_xticks(range(len(head.detected_aus)), [f"{c}" for c in head.detected_aus], fontsize=8)
-        axis.set_yticks(range(len(head.aus)), [f"AU{c}" for c in head.aus], fontsize=8)
-        axis.set_xlabel("detected AU")
-        axis.set_ylabel("commanded AU")
-        for (row, column), value in np.ndenumerate(matrix):
-            if np.isfinite(value) and abs(value) >= 0.1:
-                colour = "white" if abs(value) > 0.8 else "black"
-                axis.text(column, row, f"{value:.1f}", ha="center", va="center", fontsize=6, color=colour)
-        fig.colorbar(image, ax=axis, label="slope (detected per commanded unit)", shrink=0.8)
-        axis.set_title(f"{head.label}: cross-talk (least-squares slope)", fontsize=10)
-        fig.tight_layout()
-        out = Path(path)
-        fig.savefig(out, format="png", dpi=110)
-    finally:
-        plt.close(fig)
-    return out
-
-
-# ---------------------------------------------------------------------------------------------- human data
-
-
-def _default_human_folder() -> Path | None:
-    shared = os.environ.get("MIEN_SHARED")
-    if shared and (Path(shared) / "data").is_dir():
-        return Path(shared) / "data"
-    return None
-
-
-def _image_faces(landmarker: Any, rgb: np.ndarray, tiled: bool) -> list[np.ndarray]:
-    """(52,) scores of each face found in ``rgb``: the whole image, or overlapping vertical strips."""
-    if not tiled:
-        found = landmarker.detect(rgb)
-        return [] if found is None else [found.blendshapes]
-    width = rgb.shape[1]
-    strip = width // _TILES
-    faces: list[tuple[float, np.ndarray]] = []
-    for start in range(0, width - strip + 1, max(1, strip // 2)):
-        found = landmarker.detect(np.ascontiguousarray(rgb[:, start : start + strip]))
-        if found is None:
-            continue
-        centre = start + float(found.landmarks[:, 0].mean()) * strip
-        if all(abs(centre - seen) > 0.05 * width for seen, _ in faces):  # the same face in two strips
-            faces.append((centre, found.blendshapes))
-    return [scores for _, scores in faces]
-
-
-def human_evidence(
-    folder: str | os.PathLike[str] | None, model: str | os.PathLike[str] | None = None, progress: bool = False
-) -> HumanEvidence:
-    """MediaPipe's blendshape scores on the human media of :data:`HUMAN_DATA_AUS` found in ``folder``.
-
-    The clip is tracked with :func:`mien.tracking.track_video` (video mode, cached; frames with a face), the
-    images with a :class:`~mien.tracking.Landmarker` in image mode. ``folder`` None gives empty evidence.
-    """
-    if folder is None:
-        return HumanEvidence(folder=None)
-    root = Path(folder).expanduser().resolve()
-    if not root.is_dir():
-        raise InvalidValueError("human_data", str(root), "a folder holding video/single_face.mp4 and images/")
-    from PIL import Image
-
-    from mien.tracking import Landmarker, track_video
-
-    sources: dict[str, int] = {}
-    rows: list[np.ndarray] = []
-    performed: set[int] = set()
-    for relative, aus in HUMAN_DATA_AUS.items():
-        path = root / relative
-        if not path.is_file():
-            continue
-        if path.suffix == ".mp4":
-            track = track_video(path, model, show_progress=progress)
-            scores = np.asarray(track.blendshapes[track.face_found], dtype=np.float64)
-        else:
-            with Landmarker(model, mode="image") as landmarker:
-                rgb = np.asarray(Image.open(path).convert("RGB"))
-                scores = np.array(_image_faces(landmarker, rgb, tiled="multi" in path.stem)).reshape(-1, 52)
-        sources[relative] = len(scores)
-        if len(scores):
-            rows.append(scores)
-            performed.update(aus)
-    stacked = np.round(np.concatenate(rows), 4) if rows else np.zeros((0, 52))
-    ranges = stacked.max(axis=0) - stacked.min(axis=0) if len(stacked) else np.full(52, np.nan)
-    return HumanEvidence(str(root), sources, tuple(sorted(performed)), ranges, stacked)
-
-
 # ---------------------------------------------------------------------------------------------- running
 
 
 def _check_aus(aus: Sequence[int | str]) -> tuple[int, ...]:
-    from mien.facs.catalogue import ACTION_UNITS
-
     codes = []
     for au in aus:
         text = str(au).upper().removeprefix("AU")
@@ -749,14 +480,13 @@ def _check_aus(aus: Sequence[int | str]) -> tuple[int, ...]:
 
 def _crop(rgb: np.ndarray, hint: np.ndarray, size: int = 256) -> np.ndarray:
     """A square crop around the projected landmarks (with margin), resized to ``size`` pixels."""
-    from PIL import Image
-
+    image = require("PIL.Image", "render")
     low, high = hint.min(axis=0), hint.max(axis=0)
     centre = (low + high) / 2.0
     half = 0.75 * float((high - low).max())
     left, top = (int(v) for v in np.round(centre - half))
     right, bottom = (int(v) for v in np.round(centre + half))
-    return np.asarray(Image.fromarray(rgb).crop((left, top, right, bottom)).resize((size, size)))
+    return np.asarray(image.fromarray(rgb).crop((left, top, right, bottom)).resize((size, size)))
 
 
 def run_rig_fidelity(
@@ -786,12 +516,6 @@ def run_rig_fidelity(
     for bad intensities or size, and :class:`MissingAssetError` for an ICT head that is not installed
     (``MIEN_ICT_FACEKIT``) or a missing landmarker model.
     """
-    from mien.facs.catalogue import OPENFACS_AUS
-    from mien.paths import require_asset
-    from mien.render.camera import camera_from_options
-    from mien.rig.au_solve import AUSolver
-    from mien.rig.heads import HEADS, ict_installed
-
     started = time.perf_counter()
     commanded = _check_aus(OPENFACS_AUS if aus is None else aus)
     levels = tuple(float(v) for v in intensities)
@@ -815,13 +539,11 @@ def run_rig_fidelity(
     solver = AUSolver(aus=detected_codes)
     own_detector = detector is None
     if detector is None:
-        from mien.validate.face_detector import MediaPipeDetector
-
         detector = MediaPipeDetector(model)
 
     try:
         mark = time.perf_counter()
-        human = human_evidence(human_data if human_data is not None else _default_human_folder(), model, False)
+        human = human_evidence(human_data if human_data is not None else default_human_folder(), model, False)
         human_s = time.perf_counter() - mark
         results = []
         for name, identity in heads:
@@ -858,12 +580,6 @@ def _run_head(
     subtract_neutral: bool,
     show_progress: bool,
 ) -> HeadFidelity:
-    from mien.facs.arkit import ARKIT_NAMES
-    from mien.facs.catalogue import FACE_CHANNELS, au_channels
-    from mien.progress import progress as progress_bar
-    from mien.rig.heads import load_head
-    from mien.validate.stimuli import StimulusRenderer
-
     timings = {"load": 0.0, "render": 0.0, "detect": 0.0, "solve": 0.0}
     head_started = mark = time.perf_counter()
     rig = load_head(name, identity)

@@ -12,8 +12,14 @@ from types import TracebackType
 
 import numpy as np
 
+from mien.facs.catalogue import FACE_CHANNELS, POSE_CHANNELS
 from mien.render.camera import Camera
+from mien.render.clip_render import make_renderer
+from mien.rig.animate import face_to_rig
+from mien.rig.deform import Deformer
+from mien.rig.mapping import AUMapping
 from mien.rig.model import Rig
+from mien.rig.pose import apply_pose
 
 __all__ = ["StimulusRenderer"]
 
@@ -33,10 +39,6 @@ class StimulusRenderer:
         mapping: object | None = None,
         samples: int = 4,
     ) -> None:
-        from mien.render.clip_render import make_renderer
-        from mien.rig.deform import Deformer
-        from mien.rig.mapping import AUMapping
-
         self.rig = rig
         self.camera = camera
         self.size = (int(size[0]), int(size[1]))
@@ -60,8 +62,6 @@ class StimulusRenderer:
 
     def weights(self, frame: np.ndarray, feature_weights: np.ndarray | None = None) -> np.ndarray:
         """(n_targets,) float32 morph weights of a (62,) face frame (and optional (54,) feature weights)."""
-        from mien.rig.animate import face_to_rig
-
         frame = np.asarray(frame, dtype=np.float64)
         weights = self.mapping.to_weights(frame)
         if feature_weights is not None:
@@ -76,8 +76,6 @@ class StimulusRenderer:
         """
         deformed = self._deformer.deform(np.asarray(weights, np.float32), out=self._vertices)
         if pose is not None and np.any(pose):
-            from mien.rig.pose import apply_pose
-
             p = np.asarray(pose, dtype=np.float64)
             deformed = apply_pose(self.rig, deformed, p[:3], p[3:])
         rgb = self._renderer.render(deformed)
@@ -86,8 +84,6 @@ class StimulusRenderer:
 
     def render(self, frame: np.ndarray, feature_weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """``(rgb, hint)`` of a (62,) face frame (pose channels applied), see :meth:`render_weights`."""
-        from mien.facs.catalogue import FACE_CHANNELS, POSE_CHANNELS
-
         frame = np.asarray(frame, dtype=np.float64)
         pose = frame[[FACE_CHANNELS.index(name) for name in POSE_CHANNELS]]
         return self.render_weights(self.weights(frame, feature_weights), pose)

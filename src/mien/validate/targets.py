@@ -23,19 +23,24 @@ A target with no matching renders (a view or expression not asked for) is not ch
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from mien.validate.recognition import BLEND_COMPONENTS, VIEWS
+from mien.render.camera import VIEWS
+from mien.validate.expressions import BASICS, EXPRESSIONS, blend_components
+from mien.validate.statistics import wilson_interval
 
-__all__ = ["TARGETS", "Target", "TargetCheck", "check_targets", "scorecard_lines", "wilson_interval"]
+__all__ = ["FRONTAL", "LATERAL", "OBLIQUE", "TARGETS", "Target", "TargetCheck", "check_targets", "scorecard_lines"]
 
-BASICS = ("joy", "sadness", "anger", "surprise", "fear")
-"""The five basic emotions the classifier's targets are on (disgust has its own)."""
-FRONTAL = tuple(v for v in VIEWS if v.startswith("frontal"))
-OBLIQUE = tuple(v for v in VIEWS if v.startswith("oblique"))
+FRONTAL: tuple[str, ...] = tuple(name for name, view in VIEWS.items() if view.angle == "frontal")
+"""The frontal views of :data:`mien.render.camera.VIEWS` (the targets' first condition)."""
+OBLIQUE: tuple[str, ...] = tuple(name for name, view in VIEWS.items() if view.angle == "oblique")
+"""The 45-degree views."""
+LATERAL: tuple[str, ...] = tuple(name for name, view in VIEWS.items() if view.angle == "lateral")
+"""The 90-degree profiles (reported, not targeted: the classifier was trained on frontal faces)."""
+
+_STUDY_BLENDS = tuple(name for name in EXPRESSIONS if blend_components(name) is not None)
 
 
 @dataclass(frozen=True)
@@ -80,24 +85,9 @@ TARGETS: tuple[Target, ...] = (
     Target("45 degrees, the five", 0.75, _recognised(expression=BASICS, view=OBLIQUE)),
     Target("neutral reads neutral", 0.90, _recognised(expression="neutral", view=FRONTAL + OBLIQUE)),
     Target("disgust read as anger (FACS reading)", 0.10, _disgust_as_anger, at_most=True),
-    *(Target(f"blend {name} (top two)", 0.90, _recognised(expression=name, view=FRONTAL)) for name in BLEND_COMPONENTS),
+    *(Target(f"blend {name} (top two)", 0.90, _recognised(expression=name, view=FRONTAL)) for name in _STUDY_BLENDS),
 )
 """Every target, in the order the scorecard shows them."""
-
-
-def wilson_interval(hits: int, n: int, z: float = 1.96) -> tuple[float, float]:
-    """The Wilson score interval (95% for ``z`` = 1.96) of a share of ``hits`` in ``n``; (nan, nan) for n = 0.
-
-    >>> [round(x, 2) for x in wilson_interval(7, 8)]
-    [0.53, 0.98]
-    """
-    if n <= 0:
-        return float("nan"), float("nan")
-    p = hits / n
-    scale = 1.0 + z * z / n
-    centre = (p + z * z / (2 * n)) / scale
-    half = z * math.sqrt(p * (1.0 - p) / n + z * z / (4 * n * n)) / scale
-    return max(centre - half, 0.0), min(centre + half, 1.0)
 
 
 @dataclass(frozen=True)
@@ -125,7 +115,7 @@ class TargetCheck:
 
     @property
     def interval(self) -> tuple[float, float]:
-        """95% Wilson interval of :attr:`value` (:func:`wilson_interval`)."""
+        """95% Wilson interval of :attr:`value` (:func:`~mien.validate.statistics.wilson_interval`)."""
         return wilson_interval(self.hits, self.n)
 
     @property
