@@ -15,16 +15,6 @@ from mien.errors import InvalidValueError
 from mien.heads import instrument as instrument_module
 from mien.heads.instrument import FaceNotFoundError, Instrumentation, instrument, instrument_cached
 from mien.rig.builtin_head import builtin_head
-from mien.rig.ict_facekit import load_ict_facekit
-
-Z_UP_FACING_MINUS_Y = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
-"""mien's frame (+y up, +z forward) -> a Blender-style file's (+z up, -y forward)."""
-
-
-@pytest.fixture(scope="module")
-def ict(ict_dir: Path, landmarker_path: Path):  # type: ignore[no-untyped-def]
-    rig = load_ict_facekit(ict_dir)
-    return rig, instrument(rig.neutral, rig.faces, landmarker_path, name="ict")
 
 
 def _distances_mm(points: np.ndarray, rig) -> np.ndarray:  # type: ignore[no-untyped-def]
@@ -53,10 +43,9 @@ def test_ict_landmarks_land_near_icts_own(ict) -> None:  # type: ignore[no-untyp
     assert np.median(vertex_distances) < 7.0
 
 
-def test_a_blender_style_file_in_centimetres_is_told_apart(ict, landmarker_path: Path) -> None:  # type: ignore[no-untyped-def]
-    rig, frontal = ict
-    moved = rig.neutral.astype(np.float64) @ Z_UP_FACING_MINUS_Y.T * 100.0
-    found = instrument(moved, rig.faces, landmarker_path, name="ict-cm-zup")
+def test_a_blender_style_file_in_centimetres_is_told_apart(ict, ict_zup) -> None:  # type: ignore[no-untyped-def]
+    _, frontal = ict
+    _, found = ict_zup
     assert found.unit == "cm"
     assert found.up == (0.0, 0.0, 1.0) and found.forward == (0.0, -1.0, 0.0)
     assert found.view == "-y/+z"
