@@ -101,7 +101,8 @@ def test_head_and_identity(d: Path) -> None:
     assert (args["head"], args["identity"]) == ("default", None)
     args, _ = parsed("export {d}/smile.csv -o {d}/o.json", d)
     assert (args["head"], args["identity"]) == (None, None)
-    assert parsed("validate emotions --head ict:a,builtin --head builtin:b", d)[0]["head"] == ["ict:a,builtin", "builtin:b"]
+    heads = parsed("validate emotions --head ict:a,builtin --head builtin:b", d)[0]["head"]
+    assert heads == ["ict:a,builtin", "builtin:b"]
 
 
 def _subparsers(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentParser]:

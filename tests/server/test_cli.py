@@ -15,10 +15,8 @@ def test_send_over_udp_and_websocket(live, au_value, wait_until, capsys) -> None
     assert "sent" in capsys.readouterr().out
     wait_until(lambda: au_value(live, "a", "AU12L") == 3.0, what="AU12 from mien send")
     assert au_value(live, "a", "AU6L") == 1.5 and au_value(live, "a", "AU6R") == 0.0
-    assert (
-        main(["send", "--emotion", "sadness", "--intensity", "1.2", "--character", "b", "--udp-port", str(live.udp_port)])
-        == 0
-    )
+    argv = ["send", "--emotion", "sadness", "--intensity", "1.2", "--character", "b", "--udp-port", str(live.udp_port)]
+    assert main(argv) == 0
     wait_until(lambda: au_value(live, "b", "AU15L") > 0.5, what="sadness on b")
     argv = ["send", "--ws", "--http-port", str(live.http_port), "--character", "b", "--au", "AU26=2", "--speed", "1"]
     assert main(argv) == 0

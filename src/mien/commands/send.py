@@ -29,9 +29,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--pad", nargs=3, type=float, metavar=("P", "A", "D"), help="PAD state, each -1..1")
     parser.add_argument("--character", metavar="ID", help="target character (default: the server's first)")
     parser.add_argument("--host", default="127.0.0.1", help="server address (default %(default)s)")
-    parser.add_argument("--udp-port", type=int, help=f"the server's OpenFACS UDP port (default {DEFAULT_UDP_PORT})")
     parser.add_argument(
-        "--http-port", type=int, help=f"the server's HTTP + WebSocket port, with --ws (default {DEFAULT_HTTP_PORT})"
+        "--udp-port", type=int, metavar="PORT", help=f"the server's OpenFACS UDP port (default {DEFAULT_UDP_PORT})"
+    )
+    parser.add_argument(
+        "--http-port",
+        type=int,
+        metavar="PORT",
+        help=f"the server's HTTP + WebSocket port, with --ws (default {DEFAULT_HTTP_PORT})",
     )
     parser.add_argument("--ws", action="store_true", help="send over the WebSocket instead of UDP")
     old_port = add_deprecated_option(parser, "--port", "--udp-port, or --http-port with --ws", type=int, metavar="PORT")

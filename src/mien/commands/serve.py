@@ -16,8 +16,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "Beyond loopback, HTTP and WebSocket need an access token (printed at start).",
     )
     parser.add_argument("--host", default="127.0.0.1", help="address of every endpoint (default %(default)s)")
-    parser.add_argument("--udp-port", type=int, default=5000, help="OpenFACS UDP port (default %(default)s)")
-    parser.add_argument("--http-port", type=int, default=8000, help="HTTP + WebSocket port (default %(default)s)")
+    parser.add_argument(
+        "--udp-port", type=int, default=5000, metavar="PORT", help="OpenFACS UDP port (default %(default)s)"
+    )
+    parser.add_argument(
+        "--http-port", type=int, default=8000, metavar="PORT", help="HTTP + WebSocket port (default %(default)s)"
+    )
     parser.add_argument("--tick-hz", type=float, default=60.0, help="clock rate in Hz (default %(default)s)")
     parser.add_argument("--token", help="access token (default: none on loopback, generated beyond)")
     parser.add_argument(

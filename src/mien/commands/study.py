@@ -65,7 +65,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     with_db(serve)
     serve.add_argument("--host", default="127.0.0.1", help="address to listen on (default %(default)s)")
     port = serve.add_argument(
-        "--http-port", type=int, default=8000, help="HTTP port (default %(default)s; 0 = any free port)"
+        "--http-port", type=int, default=8000, metavar="PORT", help="HTTP port (default %(default)s; 0 = any free port)"
     )
     add_deprecated_alias(serve, "--port", port)
     serve.set_defaults(handler=run_serve)
