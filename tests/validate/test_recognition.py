@@ -220,3 +220,17 @@ def test_disgust_is_not_read_as_anger_by_its_facs_signs(ict_frontal: Recognition
     assert ict_frontal.facs_rate(expression="disgust") >= 0.75
     assert ict_frontal.facs_rate("anger", expression="disgust") == 0.0
     assert ict_frontal.facs_rate(expression="anger") >= 0.75
+
+
+def test_a_user_blend_is_judged_by_its_own_components() -> None:
+    from mien.affect.emotions import define_blend, remove_blend
+
+    define_blend("wistful", {"joy": 1.0, "sadness": 1.0})
+    try:
+        hit = _score("wistful", {"happy": 0.5, "sad": 0.4, "neutral": 0.1})
+        miss = _score("wistful", {"happy": 0.5, "angry": 0.4, "neutral": 0.1})
+        assert (hit.correct(), miss.correct()) == (True, False)
+        assert RecognitionResult((hit, miss), "fixed", {}).rate(expression="wistful") == 0.5
+    finally:
+        remove_blend("wistful")
+    assert hit.correct() is None  # no longer a name the classifier can be asked about

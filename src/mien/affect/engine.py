@@ -237,9 +237,9 @@ class EmotionBatch:
         try:
             values = np.asarray(mood, dtype=np.float64).reshape(-1)
         except (TypeError, ValueError):
-            raise InvalidValueError("mood", mood, f"{_N} intensities in [0, 5]") from None
+            raise InvalidValueError("mood", mood, f"{_N} intensities in [0, {MAX_INTENSITY:g}]") from None
         if values.shape != (_N,):
-            raise InvalidValueError("mood", mood, f"{_N} intensities in [0, 5] ({', '.join(EMOTIONS)})")
+            raise InvalidValueError("mood", mood, f"{_N} intensities in [0, {MAX_INTENSITY:g}] ({', '.join(EMOTIONS)})")
         checked = [check_intensity(v, f"mood[{name}]") for v, name in zip(values.tolist(), EMOTIONS, strict=True)]
         self.mood[rows] = checked
 

@@ -236,6 +236,29 @@ class FacsBatch:
         self._decay_dt = -1.0
         self._settled = False
 
+    def set_targets(self, rows: np.ndarray, targets: np.ndarray, tau_s: np.ndarray | None = None) -> None:
+        """Hold full AU states in one write (the server's OpenFACS messages, names resolved once by the caller).
+
+        ``rows`` (k,) distinct int rows; ``targets`` (k, n_au_channels) intensities 0..5 in
+        :data:`~mien.facs.catalogue.FACE_CHANNELS` order (every AU channel; head and gaze are left alone);
+        ``tau_s`` (k,) time constant in seconds of every AU channel of each row, NaN keeps that row's. The
+        same state as :meth:`set_many` with ``replace``. Nothing changes when any value is bad.
+        """
+        targets = np.asarray(targets, dtype=np.float64)
+        if targets.shape != (len(rows), _N_AU_CHANNELS) or not (
+            targets.size == 0 or (targets.min() >= 0.0 and targets.max() <= 5.0)  # also false for NaN
+        ):
+            raise InvalidValueError("targets", targets, f"({len(rows)}, {_N_AU_CHANNELS}) intensities in [0, 5]")
+        taus = None if tau_s is None else np.asarray(tau_s, dtype=np.float64)
+        if taus is not None and (taus.shape != (len(rows),) or bool((taus < 0.0).any())):
+            raise InvalidValueError("tau_s", tau_s, f"({len(rows)},) time constants >= 0 s (NaN: keep)")
+        self.target[rows, :_N_AU_CHANNELS] = targets
+        if taus is not None:
+            given = ~np.isnan(taus)
+            self.tau_s[rows[given], :_N_AU_CHANNELS] = taus[given, None]
+        self._decay_dt = -1.0
+        self._settled = False
+
     def set_speed(self, rows: RowIndex, speed: float, au: str | AUSpec | None = None) -> None:
         """Give every AU channel (or only ``au``'s) of ``rows`` the time constant of OpenFACS ``speed``."""
         tau = time_constant_from_speed(speed, self.tick_hz)
