@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mien.errors import InvalidValueError, UnknownNameError
-from mien.facs.intensity import check_intensity
+from mien.facs.intensity import MAX_INTENSITY, check_intensity
 
 __all__ = [
     "BLENDS",
@@ -46,9 +46,6 @@ __all__ = [
 
 EMOTIONS: tuple[str, ...] = ("joy", "sadness", "anger", "surprise", "disgust", "fear")
 """The six basic emotions, in the order every (6,) emotion vector of mien uses."""
-
-MAX_INTENSITY: float = 5.0
-"""Largest emotion intensity accepted (1 = the prototype / Table 1 magnitude; the study used 1.2 and 2.4)."""
 
 BLEND_COMPONENT_WEIGHT: float = 1.0
 """Weight of each component of the paper's 50/50 blends (see the module docstring for why 1.0, not 0.5)."""
@@ -123,9 +120,9 @@ def _check_weight(field: str, weight: object) -> float:
     try:
         w = float(weight)  # type: ignore[arg-type]
     except (TypeError, ValueError):
-        raise InvalidValueError(field, weight, "a number in (0, 5]") from None
+        raise InvalidValueError(field, weight, f"a number in (0, {MAX_INTENSITY:g}]") from None
     if not math.isfinite(w) or w <= 0.0 or w > MAX_INTENSITY:
-        raise InvalidValueError(field, weight, "a number in (0, 5]")
+        raise InvalidValueError(field, weight, f"a number in (0, {MAX_INTENSITY:g}]")
     return w
 
 

@@ -31,6 +31,7 @@ from mien.exchange.csv_table import check_increasing, columns_from_text
 from mien.exchange.timing import uniform_clip
 from mien.facs.catalogue import FACE_AU_CODES, FACE_CHANNELS, au_channels
 from mien.facs.clip import Clip
+from mien.facs.intensity import MAX_INTENSITY
 from mien.fileio.streams import Source, read_text, source_name
 
 __all__ = ["PRESENCE_INTENSITY", "SUFFIXES", "read", "sniff"]
@@ -88,9 +89,10 @@ def read(source: Source) -> Clip:
     check_increasing(table, "frame")
     for column in used_r.values():
         values = table.values[column]
-        bad = np.flatnonzero((values < 0) | (values > 5))
+        bad = np.flatnonzero((values < 0) | (values > MAX_INTENSITY))
         if bad.size:
-            raise InvalidValueError(table.where(int(bad[0]), column), float(values[bad[0]]), "an intensity in 0..5")
+            where, value = table.where(int(bad[0]), column), float(values[bad[0]])
+            raise InvalidValueError(where, value, f"an intensity in 0..{MAX_INTENSITY:g}")
     values = np.zeros((n_rows, len(FACE_CHANNELS)))
     for code, column in used_r.items():
         values[:, list(au_channels(code))] = table.values[column][:, None]

@@ -30,6 +30,7 @@ from mien.errors import InvalidValueError
 from mien.exchange.timing import uniform_clip
 from mien.facs.catalogue import FACE_AU_CODES, FACE_CHANNELS, OPENFACS_AUS, POSE_CHANNELS, au_channels
 from mien.facs.clip import Clip
+from mien.facs.intensity import MAX_INTENSITY
 from mien.fileio.streams import Source, TargetT, read_text, refuse_rig, source_name, write_text
 
 __all__ = ["SUFFIXES", "TIME_KEY", "read", "write"]
@@ -114,8 +115,8 @@ def read(source: Source) -> Clip:
                 row[FACE_CHANNELS.index(key)] = _intensity(value, where, key)
             elif match and (key in FACE_CHANNELS or (not match.group(2) and int(match.group(1)) in FACE_AU_CODES)):
                 intensity = _intensity(value, where, key)
-                if not 0.0 <= intensity <= 5.0:
-                    raise InvalidValueError(f"{where} key {key}", intensity, "an intensity in 0..5")
+                if not 0.0 <= intensity <= MAX_INTENSITY:
+                    raise InvalidValueError(f"{where} key {key}", intensity, f"an intensity in 0..{MAX_INTENSITY:g}")
                 if match.group(2):
                     row[FACE_CHANNELS.index(key)] = intensity
                 else:

@@ -24,7 +24,8 @@ __all__ = [
 ]
 
 MAX_INTENSITY = 5.0
-"""Top of the FACS scale (E)."""
+"""Top of the FACS scale (E): the largest AU intensity and the largest emotion intensity mien accepts (1 = the
+prototype / Table 1 magnitude; the study used 1.2 and 2.4). The one home of this limit."""
 
 INTENSITY_LETTERS = {"A": 1.0, "B": 2.0, "C": 3.0, "D": 4.0, "E": 5.0}
 """FACS intensity letters and the value each stands for."""
@@ -37,9 +38,9 @@ def check_intensity(value: float, field: str = "intensity") -> float:
     try:
         number = float(value)
     except (TypeError, ValueError):
-        raise InvalidValueError(field, value, "a number in [0, 5]") from None
+        raise InvalidValueError(field, value, f"a number in [0, {MAX_INTENSITY:g}]") from None
     if not math.isfinite(number) or not 0.0 <= number <= MAX_INTENSITY:
-        raise InvalidValueError(field, value, "a finite number in [0, 5]")
+        raise InvalidValueError(field, value, f"a finite number in [0, {MAX_INTENSITY:g}]")
     return number
 
 

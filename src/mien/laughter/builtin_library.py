@@ -23,6 +23,7 @@ import numpy as np
 
 from mien.facs.catalogue import FACE_CHANNELS, au_channels
 from mien.facs.clip import Clip
+from mien.facs.intensity import MAX_INTENSITY
 from mien.laughter.controllers import CONTROLLER_GAIN, DEFAULT_EPS
 from mien.laughter.library import LaughLibrary, LibraryMetadata
 from mien.laughter.names import CONTROLLER_NAMES, LAUGH_TYPES
@@ -159,7 +160,7 @@ def builtin_au_clip(type_name: str, fps: float = BUILTIN_FPS) -> Clip:
             course = env + JAW_PULSE_DEPTH * pulses
         elif r.pulses:
             course = course + EYE_PULSE_DEPTH * pulses
-        values[:, index] = np.clip(apex * course, 0.0, 5.0)
+        values[:, index] = np.clip(apex * course, 0.0, MAX_INTENSITY)
     values[:, FACE_CHANNELS.index("head_pitch_deg")] = r.head_pitch_deg * env
     return Clip(values, fps, FACE_CHANNELS)
 

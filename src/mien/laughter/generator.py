@@ -31,6 +31,7 @@ import numpy as np
 from mien.errors import InvalidValueError
 from mien.facs.catalogue import FACE_CHANNELS
 from mien.facs.clip import Clip, interpolate_frames
+from mien.facs.intensity import MAX_INTENSITY
 from mien.laughter.builtin_library import default_library, laugh_pulses
 from mien.laughter.library import LaughLibrary
 from mien.laughter.names import CONTROLLER_NAMES
@@ -95,9 +96,9 @@ def _check(intensity: float, duration_s: float | None, fps: float) -> tuple[floa
     try:
         gain = float(intensity)
     except (TypeError, ValueError):
-        raise InvalidValueError("intensity", intensity, "a number in 0..5") from None
-    if not math.isfinite(gain) or not 0.0 <= gain <= 5.0:
-        raise InvalidValueError("intensity", intensity, "a finite number in 0..5 (1 = typical)")
+        raise InvalidValueError("intensity", intensity, f"a number in 0..{MAX_INTENSITY:g}") from None
+    if not math.isfinite(gain) or not 0.0 <= gain <= MAX_INTENSITY:
+        raise InvalidValueError("intensity", intensity, f"a finite number in 0..{MAX_INTENSITY:g} (1 = typical)")
     if duration_s is not None:
         try:
             duration = float(duration_s)

@@ -19,6 +19,7 @@ import numpy as np
 
 from mien.facs.catalogue import FACE_CHANNELS
 from mien.facs.clip import Clip
+from mien.facs.intensity import MAX_INTENSITY
 from mien.laughter.names import CONTROLLER_NAMES
 from mien.laughter.taxonomy import LaughRecipe
 
@@ -79,6 +80,6 @@ def controllers_to_face(controllers: Clip, r: LaughRecipe, reference: Clip, enve
             course = env
         else:  # each side on its own peak: the recipe's apex already holds the asymmetry
             course = np.abs(columns[driver]) / peak
-        values[:, index] = np.clip(apex * course, 0.0, 5.0)
+        values[:, index] = np.clip(apex * course, 0.0, MAX_INTENSITY)
     values[:, FACE_CHANNELS.index("head_pitch_deg")] = r.head_pitch_deg * env
     return Clip(values, controllers.fps, FACE_CHANNELS)

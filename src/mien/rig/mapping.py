@@ -32,12 +32,14 @@ import numpy as np
 from mien.errors import InvalidValueError, UnknownNameError
 from mien.facs.arkit import ARKIT_NAMES
 from mien.facs.catalogue import FACE_CHANNELS, POSE_CHANNELS
+from mien.facs.intensity import MAX_INTENSITY
 from mien.rig.model import Rig
 
 __all__ = ["INTENSITY_E", "AUMapping"]
 
-INTENSITY_E = 5.0
-"""FACS intensity E on mien's 0..5 scale: where a table's ``weight_at_E`` is reached."""
+INTENSITY_E = MAX_INTENSITY
+"""FACS intensity E, the top of mien's 0..5 scale (:data:`mien.facs.intensity.MAX_INTENSITY`): where a table's
+``weight_at_E`` is reached."""
 
 _AU_CHANNELS = tuple(name for name in FACE_CHANNELS if name not in POSE_CHANNELS)
 _COLUMNS = ("channel", "target", "weight_at_E")

@@ -114,14 +114,14 @@ def viewer_controls() -> dict[str, Any]:
     metres; vertical ``fov_deg``; ``distance_m``), ``heads`` (head names a new character may use) and
     ``clip_suffixes`` (file suffixes the server reads as clips).
     """
-    from mien.affect.emotions import BLENDS, EMOTIONS
+    from mien.affect.emotions import BLENDS, EMOTIONS, MAX_INTENSITY
     from mien.affect.pad import PAD_FACTORS
     from mien.rig.heads import HEADS
 
     return {
         "aus": _aus(),
         "intensity_letters": list(INTENSITY_LETTERS),
-        "au_max": 5.0,
+        "au_max": MAX_INTENSITY,
         "emotions": list(EMOTIONS),
         "blends": list(BLENDS),
         "emotion_intensity_max": EMOTION_INTENSITY_MAX,
