@@ -31,6 +31,7 @@ __all__ = [
     "HEADS",
     "HEAD_SOURCES",
     "BuiltinHeadSource",
+    "FileHeadSource",
     "HeadSource",
     "IctHeadSource",
     "head_source",
@@ -98,17 +99,47 @@ class IctHeadSource:
         return load_ict_facekit(identity=presets[identity] if identity is not None else None)
 
 
-HEAD_SOURCES: dict[str, HeadSource] = {"builtin": BuiltinHeadSource(), "ict": IctHeadSource()}
+@dataclass(frozen=True)
+class FileHeadSource:
+    """A user's own head: a ``.glb``/``.gltf``/``.vrm`` file or an OBJ folder (:mod:`mien.rig.files`).
+
+    Its "identity" is the path; a spec that is an existing head file or folder (or ``file:PATH``) selects it.
+    """
+
+    name: str = "file"
+
+    def available(self) -> bool:
+        return True
+
+    def identities(self) -> tuple[str, ...]:
+        return ()
+
+    def load(self, identity: str | None) -> Rig:
+        from mien.rig.files import load_head_file
+
+        if identity is None:
+            raise InvalidValueError("head file", identity, "a path: file:PATH or an existing .glb/.gltf/.vrm or folder")
+        return load_head_file(identity)
+
+
+HEAD_SOURCES: dict[str, HeadSource] = {"builtin": BuiltinHeadSource(), "ict": IctHeadSource(), "file": FileHeadSource()}
 """Head name -> its source. ``default`` is not a source: it resolves to ``ict`` when installed, else ``builtin``."""
 
-HEADS: tuple[str, ...] = ("default", *HEAD_SOURCES)
-"""Head names a spec may start with: ``default`` and every source of :data:`HEAD_SOURCES`."""
+HEADS: tuple[str, ...] = ("default", *(name for name in HEAD_SOURCES if name != "file"))
+"""Named heads a spec may start with: ``default`` and every source of :data:`HEAD_SOURCES` but ``file`` (a file
+head is named by its path, or ``file:PATH``)."""
 
 
 def parse_head_spec(spec: str) -> tuple[str, str | None]:
     """``"HEAD[:IDENTITY]"`` -> ``(head, identity or None)``; the head must be one of :data:`HEADS`."""
     if not isinstance(spec, str) or not spec.strip():
         raise InvalidValueError("head", spec, f"HEAD[:IDENTITY] with HEAD one of {', '.join(HEADS)}")
+    from mien.rig.files.head import is_head_file
+
+    if spec.startswith("file:"):
+        return "file", spec[len("file:") :]
+    if is_head_file(spec):
+        return "file", spec
     name, _, identity = spec.strip().partition(":")
     if name not in HEADS:
         raise UnknownNameError("head", name, HEADS)
@@ -117,7 +148,7 @@ def parse_head_spec(spec: str) -> tuple[str, str | None]:
 
 def resolve_head_name(name: str) -> str:
     """The source name ``name`` stands for: ``default`` -> ``ict`` when installed, else ``builtin``."""
-    if name not in HEADS:
+    if name not in HEADS and name != "file":
         raise UnknownNameError("head", name, HEADS)
     if name == "default":
         return "ict" if HEAD_SOURCES["ict"].available() else "builtin"
@@ -135,7 +166,7 @@ def ict_installed() -> bool:
 
 
 def load_head(name: str = "default", identity: str | None = None, feature_points: bool = False) -> Rig:
-    """The head ``name`` (a :data:`HEADS` name, or a ``HEAD:IDENTITY`` spec) with ``identity``.
+    """The head ``name`` (a :data:`HEADS` name, a ``HEAD:IDENTITY`` spec, or a head file's path) with ``identity``.
 
     ``identity`` is a preset name of that head (None = the head's default; it may also come after a colon in
     ``name``, but not both). Built-in identities: :data:`mien.rig.builtin_head.BUILTIN_IDENTITIES`; ICT
@@ -143,7 +174,7 @@ def load_head(name: str = "default", identity: str | None = None, feature_points
     feature-point rig is compiled onto the head (54 extra targets ``fp_<Feature>_<axis>``) with its
     skin-detail correctives (``fpc_<shape>``, :mod:`mien.rig.fp_correctives`).
     """
-    head, spec_identity = parse_head_spec(name)
+    head, spec_identity = parse_head_spec(str(name))
     if spec_identity is not None and identity is not None and spec_identity != identity:
         raise InvalidValueError("identity", identity, f"one identity: {name!r} already names {spec_identity!r}")
     rig = head_source(head).load(identity if identity is not None else spec_identity)
