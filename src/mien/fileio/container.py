@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 import zipfile
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -32,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from mien.errors import InvalidValueError, MissingAssetError
-from mien.fileio.streams import Source, Target, source_name
+from mien.fileio.streams import Source, Target, atomic_open, source_name
 
 __all__ = ["Container", "load_container", "save_container"]
 
@@ -83,14 +82,8 @@ def save_container(
         return None
     path = Path(target)
     path.parent.mkdir(parents=True, exist_ok=True)
-    handle, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(handle, "wb") as stream:
-            save(stream, **payload)
-        os.replace(temporary, path)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
-        raise
+    with atomic_open(path) as stream:
+        save(stream, **payload)
     return path
 
 

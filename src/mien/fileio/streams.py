@@ -2,7 +2,10 @@
 
 A *source* is a path (``str`` or :class:`os.PathLike`) or a binary stream with ``read()``; a *target* is a path or
 a binary stream with ``write()``. Writing to a path is atomic (a temporary file in the same folder, then a
-rename), so a reader never sees half a file and a failed write leaves the old file in place.
+rename), so a reader never sees half a file and a failed write leaves the old file in place. Every atomic write
+of mien goes through :func:`atomic_path` (for libraries that write by path: PIL, matplotlib, ffmpeg, numpy) or
+:func:`atomic_open` (a stream); the temporary file is ``.<stem>.<random>.tmp<suffix>`` next to the target, so
+a library that picks the format by suffix still sees it.
 
 >>> import io
 >>> buffer = io.BytesIO()
@@ -16,6 +19,8 @@ from __future__ import annotations
 
 import os
 import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import IO, TypeVar, Union
 
@@ -25,10 +30,13 @@ __all__ = [
     "Source",
     "Target",
     "TargetT",
+    "atomic_open",
+    "atomic_path",
     "read_bytes",
     "read_text",
     "refuse_rig",
     "source_name",
+    "temporary_path",
     "write_bytes",
     "write_text",
 ]
@@ -82,15 +90,46 @@ def write_bytes(data: bytes, target: Target) -> Path | None:
     path = Path(target)
     if path.parent and not path.parent.is_dir():
         raise InvalidValueError("output", str(path), "a path in an existing folder")
-    handle, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    with atomic_open(path) as stream:
+        stream.write(data)
+    return path
+
+
+def temporary_path(path: str | os.PathLike[str]) -> Path:
+    """A new empty file ``.<stem>.<random>.tmp<suffix>`` in ``path``'s folder (which must exist): where an
+    atomic write of ``path`` goes before its rename."""
+    path = Path(path)
+    handle, temporary = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}", dir=path.parent)
+    os.close(handle)
+    return Path(temporary)
+
+
+@contextmanager
+def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
+    """Yield a temporary path (see :func:`temporary_path`) to write ``path``'s content to; a clean exit renames it
+    onto ``path`` (replacing any old file), an exception removes it and leaves ``path`` as it was.
+
+    >>> import tempfile
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> with atomic_path(folder / "a.txt") as temporary:
+    ...     _ = temporary.write_text("done")
+    >>> (folder / "a.txt").read_text(), sorted(p.name for p in folder.iterdir())
+    ('done', ['a.txt'])
+    """
+    temporary = temporary_path(path)
     try:
-        with os.fdopen(handle, "wb") as stream:
-            stream.write(data)
+        yield temporary
         os.replace(temporary, path)
     except BaseException:
-        Path(temporary).unlink(missing_ok=True)
+        temporary.unlink(missing_ok=True)
         raise
-    return path
+
+
+@contextmanager
+def atomic_open(path: str | os.PathLike[str]) -> Iterator[IO[bytes]]:
+    """Yield a binary stream whose bytes become ``path`` atomically on a clean exit (see :func:`atomic_path`)."""
+    with atomic_path(path) as temporary, open(temporary, "wb") as stream:
+        yield stream
 
 
 def write_text(text: str, target: Target) -> Path | None:
