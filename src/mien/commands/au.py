@@ -46,7 +46,7 @@ def run(args: argparse.Namespace) -> int:
     if args.play:
         onset, apex, offset = args.play
         for spec in specs:
-            character.play_au(spec, None, onset, apex, offset, start_s=args.start)
+            character.play_au(spec, None, onset_s=onset, apex_s=apex, offset_s=offset, start_s=args.start)
         clip = character.run(args.duration, fps)
     else:
         head = character.run(n_before / fps, fps).values if n_before else None

@@ -96,7 +96,9 @@ def _face_clip(args: argparse.Namespace) -> tuple[Clip, np.ndarray | None, int]:
         from mien.facs.envelope import Envelope
 
         hold = max(0.3, args.duration - 1.5)
-        character.emote(resolve_emotion(" ".join(args.what)), args.intensity, 0.2, Envelope(0.4, hold, 0.5))
+        character.emote(
+            resolve_emotion(" ".join(args.what)), args.intensity, start_s=0.2, envelope=Envelope(0.4, hold, 0.5)
+        )
         peak_s = 0.2 + 0.4 + 0.5 * hold
     clip = character.run(args.duration, args.fps)
     return clip, getattr(character, "last_feature_weights", None), min(clip.n_frames - 1, int(peak_s * args.fps))
