@@ -25,6 +25,7 @@ reproducible; time must not go backwards. The per-step products go through
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -33,7 +34,7 @@ import numpy as np
 
 from mien.affect.basis import facs_basis, feature_point_basis, saturate
 from mien.affect.emotions import Blend, blend_components, check_intensity
-from mien.affect.engine import EmotionBatch
+from mien.affect.engine import MODES, EmotionBatch
 from mien.errors import InvalidValueError
 from mien.facs.catalogue import FACE_CHANNELS, POSE_CHANNELS
 from mien.facs.clip import Clip
@@ -59,6 +60,7 @@ def _mouth_channel_ids() -> np.ndarray:
 
 
 _MOUTH = _mouth_channel_ids()
+_MOUTH_OF = operator.itemgetter(*_MOUTH.tolist())
 
 
 def _idle_settings(idle: IdleSettings | bool) -> IdleSettings | None:
@@ -73,6 +75,12 @@ def _check_seed(seed: object) -> int:
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or int(seed) < 0:
         raise InvalidValueError("seed", seed, "a non-negative integer")
     return int(seed)
+
+
+def _check_mode(emotion_mode: str) -> str:
+    if emotion_mode not in MODES:
+        raise InvalidValueError("emotion_mode", emotion_mode, f"one of {', '.join(MODES)}")
+    return emotion_mode
 
 
 def _check_basis(expression_basis: str) -> str:
@@ -128,8 +136,12 @@ class CharacterBatch:
     raise :class:`~mien.errors.InvalidValueError` / :class:`~mien.errors.UnknownNameError` before any
     state changes. Times are seconds and must not decrease; the FACS layer starts at t = 0.
 
-    ``seeds``: (n,) seeds, or an int n for seeds ``0..n-1`` (``CharacterBatch(0)`` is empty). ``idle`` and
-    ``expression_basis`` apply to these first rows; :meth:`add_character` chooses per row.
+    ``seeds``: (n,) seeds, or an int n for seeds ``0..n-1`` (``CharacterBatch(0)`` is empty). ``idle``,
+    ``expression_basis`` and ``emotion_mode`` apply to these first rows; :meth:`add_character` chooses per row.
+    A row in ``emotion_mode="categorical"`` refuses :meth:`set_pad`; in ``"pad"`` events still add on top.
+
+    The command methods are those of :class:`Character` with ``rows`` first (a test holds them equal);
+    timing arguments are keyword-only.
 
     >>> batch = CharacterBatch(0)
     >>> a = batch.add_character(seed=1, idle=False)
@@ -150,6 +162,7 @@ class CharacterBatch:
         mood_max_step_s: float = 0.05,
         tick_hz: float = 60.0,
         expression_basis: str = "facs",
+        emotion_mode: str = "categorical",
     ) -> None:
         if isinstance(seeds, int | np.integer) and not isinstance(seeds, bool):
             if seeds < 0:
@@ -160,6 +173,7 @@ class CharacterBatch:
         if seeds_array.size and (seeds_array.dtype.kind not in "iu" or seeds_array.min() < 0):
             raise InvalidValueError("seeds", seeds, "non-negative integer seeds")
         basis = _check_basis(expression_basis)
+        mode = _check_mode(emotion_mode)
         settings = _idle_settings(idle)
         n = int(seeds_array.shape[0])
         self.tick_hz = float(tick_hz)
@@ -175,6 +189,7 @@ class CharacterBatch:
         """(n,) seed of each row (idle behaviour and default laughter seed)."""
         self._active = np.ones(n, bool)
         self._features = np.full(n, basis == "feature_points")
+        self._pad_mode = np.full(n, mode == "pad")
         self._has_features = bool(self._features.any())
         self._free: list[int] = []
         self._laughs: dict[int, list[_ActiveLaugh]] = {}
@@ -210,15 +225,27 @@ class CharacterBatch:
         """``"facs"`` or ``"feature_points"``: how emotions reach ``row``'s face."""
         return "feature_points" if self._features[self._rows(row)[0]] else "facs"
 
-    def add_character(self, seed: int = 0, idle: IdleSettings | bool = True, expression_basis: str = "facs") -> int:
+    def emotion_mode(self, row: int) -> str:
+        """``"categorical"`` or ``"pad"`` (:meth:`set_pad` allowed): ``row``'s emotion mode."""
+        return "pad" if self._pad_mode[self._rows(row)[0]] else "categorical"
+
+    def add_character(
+        self,
+        seed: int = 0,
+        idle: IdleSettings | bool = True,
+        expression_basis: str = "facs",
+        emotion_mode: str = "categorical",
+    ) -> int:
         """Add a neutral character and return its row (a freed row is reused first).
 
         ``seed`` (int >= 0) seeds its idle behaviour and laughter; ``idle``: True, False or an
-        :class:`IdleSettings`; ``expression_basis``: one of :data:`EXPRESSION_BASES`. Its idle starts now.
+        :class:`IdleSettings`; ``expression_basis``: one of :data:`EXPRESSION_BASES`; ``emotion_mode``:
+        ``"categorical"`` or ``"pad"`` (:meth:`set_pad` allowed). Its idle starts now.
         """
         value = _check_seed(seed)
         settings = _idle_settings(idle)
         basis = _check_basis(expression_basis)
+        mode = _check_mode(emotion_mode)
         if self._free:
             row = self._free.pop(0)
             self.idle.reset_rows(np.array([row]), np.array([value]), settings, self.time_s)
@@ -230,6 +257,7 @@ class CharacterBatch:
             self.seeds = np.append(self.seeds, value)
             self._active = np.append(self._active, False)
             self._features = np.append(self._features, False)
+            self._pad_mode = np.append(self._pad_mode, False)
             self._frames = np.zeros((row + 1, _N))
             self._expression = np.zeros((row + 1, _N))
             self._mood_expression = np.zeros((row + 1, _N))
@@ -238,6 +266,7 @@ class CharacterBatch:
         self.seeds[row] = value
         self._active[row] = True
         self._features[row] = basis == "feature_points"
+        self._pad_mode[row] = mode == "pad"
         self._has_features = bool(self._features.any())
         return row
 
@@ -253,6 +282,7 @@ class CharacterBatch:
         self._laughs.pop(index, None)
         self._active[index] = False
         self._features[index] = False
+        self._pad_mode[index] = False
         self._has_features = bool(self._features.any())
         self._frames[index] = 0.0
         self.feature_weights[index] = 0.0
@@ -279,18 +309,21 @@ class CharacterBatch:
 
     # ------------------------------------------------------------------ commands
 
-    def set_aus(self, rows: RowIndex, intensities: Mapping[str, float], replace: bool = True) -> None:
-        """Hold the AUs of an OpenFACS message: ``{"AU12": 3.0, "L4": 1.0, ...}``, intensities 0..5.
+    def set_aus(
+        self, rows: RowIndex, intensities: Mapping[str, float], *, speed: float | None = None, replace: bool = False
+    ) -> None:
+        """Hold several AUs: ``{"AU12": 3.0, "L4": 1.0, ...}``, intensities 0..5.
 
-        With ``replace`` (a full-state message) every AU not given goes to 0.
+        ``speed`` is OpenFACS's Speed (see :meth:`set_speed`) of the AUs named (of every AU with ``replace``);
+        with ``replace`` (a full-state OpenFACS message) every AU not named goes to 0.
         """
-        self.facs.set_many(self._rows(rows), intensities, replace=replace)
+        self.facs.set_many(self._rows(rows), intensities, speed=speed, replace=replace)
 
     def set_au(
-        self, rows: RowIndex, au: str | AUSpec, intensity: float | None = None, tau_s: float | None = None
+        self, rows: RowIndex, au: str | AUSpec, intensity: float | None = None, *, tau_s: float | None = None
     ) -> None:
         """Hold ``au`` (``"AU12"``, ``"L12C"``...) at ``intensity`` 0..5; ``tau_s`` its time constant (0 jumps)."""
-        self.facs.set(self._rows(rows), au, intensity, tau_s)
+        self.facs.set(self._rows(rows), au, intensity, tau_s=tau_s)
 
     def set_speed(self, rows: RowIndex, speed: float, au: str | None = None) -> None:
         """OpenFACS Speed (fraction per tick at :attr:`tick_hz`, 0..1) of every AU channel, or of ``au``.
@@ -305,32 +338,44 @@ class CharacterBatch:
         rows: RowIndex,
         au: str | AUSpec,
         intensity: float | None = None,
+        *,
         onset_s: float = 0.4,
         apex_s: float = 0.3,
         offset_s: float = 0.3,
         start_s: float | None = None,
     ) -> TimedAction:
         """Play an AU once with an onset/apex/offset envelope (seconds), starting now or at ``start_s``."""
-        return self.facs.play(self._rows(rows), au, intensity, start_s, onset_s, apex_s, offset_s)
+        return self.facs.play(
+            self._rows(rows), au, intensity, onset_s=onset_s, apex_s=apex_s, offset_s=offset_s, start_s=start_s
+        )
 
     def emote(
         self,
         rows: RowIndex,
-        emotion_or_blend: str | Blend,
+        emotion: str | Blend,
         intensity: float = 1.0,
-        t_s: float | None = None,
+        *,
+        start_s: float | None = None,
         envelope: Envelope | None = None,
     ) -> None:
-        """Trigger an emotion or blend event (intensity 0..5, 1 = the prototype) at ``t_s`` (default: now)."""
+        """Trigger an emotion or blend event (intensity 0..5, 1 = the prototype) now or at ``start_s``."""
         self.emotions.trigger(
-            self._rows(rows), emotion_or_blend, intensity, self.time_s if t_s is None else t_s, envelope
+            self._rows(rows), emotion, intensity, self.time_s if start_s is None else start_s, envelope
         )
 
     def set_pad(
-        self, rows: RowIndex, pleasure: float, arousal: float, dominance: float, t_s: float | None = None
+        self, rows: RowIndex, pleasure: float, arousal: float, dominance: float, *, start_s: float | None = None
     ) -> None:
-        """Move the PAD state (each factor in [-1, 1]) at ``t_s`` (default: now); the rows' emotion follows it."""
-        self.emotions.set_pad(self._rows(rows), pleasure, arousal, dominance, self.time_s if t_s is None else t_s)
+        """Move the PAD state (each factor in [-1, 1]) now or at ``start_s``; the rows' emotion follows it.
+
+        Only rows in ``emotion_mode="pad"`` (:meth:`add_character`, :class:`Character`).
+        """
+        ids = self._rows(rows)
+        if not self._pad_mode[ids].all():
+            raise InvalidValueError(
+                "emotion_mode", "categorical", "'pad' to use set_pad (Character(emotion_mode='pad'))"
+            )
+        self.emotions.set_pad(ids, pleasure, arousal, dominance, self.time_s if start_s is None else start_s)
 
     def set_mood(self, rows: RowIndex, mood: Mapping[str, float] | np.ndarray) -> None:
         """Set the mood: a (6,) vector (EMOTIONS order) or ``{emotion or blend: intensity}``."""
@@ -341,9 +386,10 @@ class CharacterBatch:
         rows: RowIndex,
         laugh_type: str,
         intensity: float = 1.0,
-        start_s: float | None = None,
-        seed: int | None = None,
+        *,
         duration_s: float | None = None,
+        seed: int | None = None,
+        start_s: float | None = None,
     ) -> Clip:
         """Play a laugh or smile (one of the 13 types) on ``rows``; returns the face clip of the first row.
 
@@ -364,7 +410,7 @@ class CharacterBatch:
             self._start_clip(row, clips[row_seed], start_s)
         return next(iter(clips.values()))
 
-    def play_clip(self, rows: RowIndex, clip: Clip, start_s: float | None = None) -> None:
+    def play_clip(self, rows: RowIndex, clip: Clip, *, start_s: float | None = None) -> None:
         """Add a face clip (channels ⊂ FACE_CHANNELS: a laugh, an imported performance) as a layer on ``rows``."""
         ids = self._rows(rows)
         face = _face_clip(clip)
@@ -395,8 +441,8 @@ class CharacterBatch:
         frames[:] = self.facs.advance(t)
         self._t_s = t
         emotions = self.emotions
-        emotion = emotions.advance(t)
-        if not emotions.quiet or emotion.any() or emotions.mood.any():
+        emotions.advance(t)
+        if not emotions.resting:
             emotion, shown = emotions.expressed(t)
             expression = matmul_rows(emotion, self._basis, self._expression)
             expression += matmul_rows(shown, self._mood_basis, self._mood_expression)
@@ -423,10 +469,18 @@ class CharacterBatch:
                 else:
                     del self._laughs[row]
         # idle mouth motion yields to a laughing mouth, and in proportion to other mouth activity
-        mouth_scale = np.maximum(0.0, 1.0 - frames[:, _MOUTH].max(axis=1, initial=0.0) / 2.0)
-        if laughing is not None:
-            mouth_scale[laughing] = 0.0
-        self.idle.apply(t, frames, mouth_scale)
+        idle = self.idle
+        if frames.shape[0] == 1:  # a batch of one: the idle layer's one-row path, on Python floats
+            if idle.moving:
+                values = frames[0].tolist()
+                mouth = max(0.0, 1.0 - max(0.0, *_MOUTH_OF(values)) / 2.0)
+                idle.apply_row(t, values, 0.0 if laughing is not None and laughing[0] else mouth)
+                frames[0] = values
+        else:
+            mouth_scale = np.maximum(0.0, 1.0 - frames[:, _MOUTH].max(axis=1, initial=0.0) / 2.0)
+            if laughing is not None:
+                mouth_scale[laughing] = 0.0
+            idle.apply(t, frames, mouth_scale)
         aus = frames[:, :_N_AU]
         np.maximum(aus, 0.0, out=aus)
         np.minimum(aus, 5.0, out=aus)
@@ -444,6 +498,9 @@ class CharacterBatch:
 
 class Character:
     """One animated face: a :class:`CharacterBatch` of one row. Give it commands, then :meth:`step`.
+
+    Its commands are the batch's without ``rows`` (same names, order, defaults and keyword-only timing
+    arguments: ``tests/character/test_batch.py`` fails when they drift), and each is one call to the batch.
 
     >>> c = Character(seed=1, idle=False)
     >>> c.emote("joy", 1.0)
@@ -463,21 +520,23 @@ class Character:
         mood_gain: float = 1.0,
         tick_hz: float = 60.0,
     ) -> None:
-        from mien.affect.engine import MODES
-
-        if emotion_mode not in MODES:
-            raise InvalidValueError("emotion_mode", emotion_mode, f"one of {', '.join(MODES)}")
         self.seed = _check_seed(seed)
         """Seed of the idle behaviour (and default seed of laughter)."""
         self.expression_basis = _check_basis(expression_basis)
         """``"facs"`` or ``"feature_points"``."""
-        self.emotion_mode = emotion_mode
+        self.emotion_mode = _check_mode(emotion_mode)
         """``"categorical"`` or ``"pad"`` (:meth:`set_pad` only in ``"pad"``)."""
         self.batch = CharacterBatch(
-            0, envelope=envelope, mood_time_constant_s=mood_time_constant_s, mood_gain=mood_gain, tick_hz=tick_hz
+            np.array([self.seed]),
+            idle,
+            envelope,
+            mood_time_constant_s,
+            mood_gain,
+            tick_hz=tick_hz,
+            expression_basis=expression_basis,
+            emotion_mode=emotion_mode,
         )
         """The one-row batch that does the work."""
-        self.batch.add_character(self.seed, idle, expression_basis)
         self.last_feature_weights: np.ndarray | None = None
         """(n_frames, 54) feature weights of the last :meth:`run` (``"feature_points"`` basis only)."""
 
@@ -491,15 +550,17 @@ class Character:
         """(54,) feature-point target weights (metres) of the last step (``"feature_points"`` basis only)."""
         return self.batch.feature_weights[0]
 
-    # ------------------------------------------------------------------ commands
+    # ------------------------------------------------------------------ commands (see CharacterBatch)
 
-    def set_au(self, au: str | AUSpec, intensity: float | None = None, tau_s: float | None = None) -> None:
-        """Hold an AU (``"AU12"``, ``"L12C"``...) at ``intensity`` 0..5; ``tau_s`` its time constant."""
-        self.batch.set_au(0, au, intensity, tau_s)
-
-    def set_aus(self, intensities: Mapping[str, float], speed: float | None = None, replace: bool = False) -> None:
+    def set_aus(
+        self, intensities: Mapping[str, float], *, speed: float | None = None, replace: bool = False
+    ) -> None:
         """Hold several AUs; ``speed`` is OpenFACS's per-tick Speed; ``replace`` zeroes the AUs not named."""
-        self.batch.facs.set_many(0, intensities, speed=speed, replace=replace)
+        self.batch.set_aus(0, intensities, speed=speed, replace=replace)
+
+    def set_au(self, au: str | AUSpec, intensity: float | None = None, *, tau_s: float | None = None) -> None:
+        """Hold an AU (``"AU12"``, ``"L12C"``...) at ``intensity`` 0..5; ``tau_s`` its time constant."""
+        self.batch.set_au(0, au, intensity, tau_s=tau_s)
 
     def set_speed(self, speed: float, au: str | None = None) -> None:
         """OpenFACS Speed (per tick at the nominal rate) of every AU channel, or of ``au``."""
@@ -509,31 +570,29 @@ class Character:
         self,
         au: str | AUSpec,
         intensity: float | None = None,
+        *,
         onset_s: float = 0.4,
         apex_s: float = 0.3,
         offset_s: float = 0.3,
         start_s: float | None = None,
     ) -> TimedAction:
         """Play an AU once with an onset/apex/offset envelope, starting now or at ``start_s``."""
-        return self.batch.play_au(0, au, intensity, onset_s, apex_s, offset_s, start_s)
+        return self.batch.play_au(0, au, intensity, onset_s=onset_s, apex_s=apex_s, offset_s=offset_s, start_s=start_s)
 
     def emote(
         self,
         emotion: str | Blend,
         intensity: float = 1.0,
+        *,
         start_s: float | None = None,
         envelope: Envelope | None = None,
     ) -> None:
         """Trigger an emotion or blend event (intensity 0..5, 1 = the prototype) now or at ``start_s``."""
-        self.batch.emote(0, emotion, intensity, start_s, envelope)
+        self.batch.emote(0, emotion, intensity, start_s=start_s, envelope=envelope)
 
-    def set_pad(self, pleasure: float, arousal: float, dominance: float) -> None:
-        """Move the PAD state (each in [-1, 1]; needs ``emotion_mode="pad"``)."""
-        if self.emotion_mode != "pad":
-            raise InvalidValueError(
-                "emotion_mode", self.emotion_mode, "'pad' to use set_pad (Character(emotion_mode='pad'))"
-            )
-        self.batch.set_pad(0, pleasure, arousal, dominance)
+    def set_pad(self, pleasure: float, arousal: float, dominance: float, *, start_s: float | None = None) -> None:
+        """Move the PAD state (each in [-1, 1]; needs ``emotion_mode="pad"``) now or at ``start_s``."""
+        self.batch.set_pad(0, pleasure, arousal, dominance, start_s=start_s)
 
     def set_mood(self, mood: Mapping[str, float] | np.ndarray) -> None:
         """Set the mood: a (6,) vector or ``{emotion: intensity}``."""
@@ -543,16 +602,17 @@ class Character:
         self,
         laugh_type: str,
         intensity: float = 1.0,
+        *,
         duration_s: float | None = None,
         seed: int | None = None,
         start_s: float | None = None,
     ) -> Clip:
         """Play a laugh or smile (one of the 13 types); returns its face clip. The laugh drives the mouth."""
-        return self.batch.laugh(0, laugh_type, intensity, start_s=start_s, seed=seed, duration_s=duration_s)
+        return self.batch.laugh(0, laugh_type, intensity, duration_s=duration_s, seed=seed, start_s=start_s)
 
-    def play_clip(self, clip: Clip, start_s: float | None = None) -> None:
+    def play_clip(self, clip: Clip, *, start_s: float | None = None) -> None:
         """Add a face clip (channels ⊂ FACE_CHANNELS, e.g. a laugh or an imported performance) as a layer."""
-        self.batch.play_clip(0, clip, start_s)
+        self.batch.play_clip(0, clip, start_s=start_s)
 
     # ------------------------------------------------------------------ output
 

@@ -111,9 +111,9 @@ def test_batch_equals_single_characters():
     seeds = [3, 5, 8]
     batch = CharacterBatch(np.array(seeds))
     singles = [Character(seed=s) for s in seeds]
-    batch.emote(0, "joy", 1.2, 0.5)
+    batch.emote(0, "joy", 1.2, start_s=0.5)
     singles[0].emote("joy", 1.2, start_s=0.5)
-    batch.emote([1, 2], "frustrated", 1.0, 1.0)
+    batch.emote([1, 2], "frustrated", 1.0, start_s=1.0)
     for s in singles[1:]:
         s.emote("frustrated", 1.0, start_s=1.0)
     batch.set_au(2, "AU4", 3.0)

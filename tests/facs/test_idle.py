@@ -130,26 +130,48 @@ def test_walks_keep_the_seeded_stream_across_the_old_block_boundary():
 
 
 def test_every_step_draws_the_same_amount_of_randomness(monkeypatch):
-    """No step computes ahead: each 60 Hz step advances the walks one tick, one draw of (n, 10) uniforms."""
+    """No step of a batch computes ahead: each 60 Hz step advances the walks one tick, one draw of (n, 10) uniforms.
+
+    A batch of one row draws 64 ticks at a time instead (one numpy call a second, not one a tick).
+    """
     import mien.facs.idle as idle_module
 
     sizes: list[int] = []
-    real = idle_module.uniform
+    real = idle_module.uniform_from_keys
 
-    def counting(seed, stream, counter):
-        values = real(seed, stream, counter)
+    def counting(keys, counter):
+        values = real(keys, counter)
         sizes.append(values.size)
         return values
 
-    batch = IdleBatch(np.arange(4), IdleSettings(blink=False, gaze=False))
-    monkeypatch.setattr(idle_module, "uniform", counting)
-    frames = np.zeros((4, len(FACE_CHANNELS)))
-    per_step = []
-    for i in range(1, 1200):
-        sizes.clear()
-        batch.apply(i / 60.0, frames)
-        per_step.append(sum(sizes))
-    assert set(per_step) == {4 * 10}
+    monkeypatch.setattr(idle_module, "uniform_from_keys", counting)
+    for n_rows, expected in ((4, {4 * 10}), (1, {0, 64 * 10})):
+        batch = IdleBatch(np.arange(n_rows), IdleSettings(blink=False, gaze=False))
+        frames = np.zeros((n_rows, len(FACE_CHANNELS)))
+        per_step = []
+        for i in range(1, 1200):
+            sizes.clear()
+            batch.apply(i / 60.0, frames)
+            per_step.append(sum(sizes))
+        assert set(per_step) == expected
+        assert sum(per_step) == (n_rows * 10 * 1199 if n_rows > 1 else 64 * 10 * 19)
+
+
+def test_a_row_of_one_equals_a_row_of_a_batch_at_any_step_times():
+    """The one-row path (Python floats, draws in blocks) gives the vectorised path's numbers, bit for bit."""
+    rng = np.random.default_rng(3)
+    for seed in (0, 7):
+        one, two = IdleBatch(np.array([seed])), IdleBatch(np.array([seed, seed + 1]))
+        frame_one, frames_two = np.zeros((1, len(FACE_CHANNELS))), np.zeros((2, len(FACE_CHANNELS)))
+        t = 0.0
+        for _ in range(4000):
+            t += float(rng.choice([1 / 60, 1 / 30, 0.0, 0.4, 1 / 144]))
+            frame_one[:] = frames_two[0] = rng.uniform(0.0, 2.0, len(FACE_CHANNELS))
+            mouth_scale = float(rng.uniform())
+            one.apply(t, frame_one, mouth_scale)
+            two.apply(t, frames_two, np.array([mouth_scale, 1.0]))
+            np.testing.assert_array_equal(frame_one[0], frames_two[0])
+        assert one.walk_positions(t).tolist() == two.walk_positions(t)[:1].tolist()
 
 
 def test_rows_with_their_own_settings_equal_single_idles():

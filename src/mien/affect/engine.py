@@ -132,8 +132,10 @@ class EmotionBatch:
         self.mood_max_step_s = step
         """Longest mood integration step, seconds."""
         self.mood = np.zeros((n_rows, _N))
-        """(n, 6) mood of each row at the latest time advanced to."""
+        """(n, 6) mood of each row at the latest time advanced to (change it with :meth:`set_mood`)."""
+        self._mood_zero = True  # mood is known to be all 0
         self._emotion = np.zeros((n_rows, _N))  # emotion at _t_s
+        self._emotion_zero = True  # _emotion is known to be all 0 (a flag, not a scan, on every step)
         self._t_s: float | None = None
         self._dirty = False
         # events: one row each in parallel arrays
@@ -142,6 +144,7 @@ class EmotionBatch:
         self._ev_amount = np.zeros((0, _N))
         # PAD: linear ramp from _pad_from (at _pad_t0_s) to _pad_to over _pad_ramp_s, per row
         self._pad_on = np.zeros(n_rows, bool)
+        self._pad_any = False  # any(_pad_on), kept up to date by set_pad and reset_rows
         self._pad_from = np.zeros((n_rows, 3))
         self._pad_to = np.zeros((n_rows, 3))
         self._pad_t0_s = np.zeros(n_rows)
@@ -174,6 +177,7 @@ class EmotionBatch:
         for array in (self.mood, self._emotion, self._pad_from, self._pad_to, self._pad_settled):
             array[rows] = 0.0
         self._pad_on[rows] = False
+        self._pad_any = bool(self._pad_on.any())
         self._pad_t0_s[rows] = 0.0
         self._pad_ramp_s[rows] = 0.0
         if self._ev_row.size:
@@ -230,6 +234,7 @@ class EmotionBatch:
         self._pad_ramp_s[row_ids] = self.envelope.onset_s
         self._pad_settled[row_ids] = pad_intensities(*target, radius=self.pad_radius)
         self._pad_on[row_ids] = True
+        self._pad_any = bool(row_ids.size) or self._pad_any
         self._dirty = True
 
     def set_mood(self, rows: RowIndex, mood: object) -> None:
@@ -242,6 +247,7 @@ class EmotionBatch:
             raise InvalidValueError("mood", mood, f"{_N} intensities in [0, {MAX_INTENSITY:g}] ({', '.join(EMOTIONS)})")
         checked = [check_intensity(v, f"mood[{name}]") for v, name in zip(values.tolist(), EMOTIONS, strict=True)]
         self.mood[rows] = checked
+        self._mood_zero = False
 
     # ---------------------------------------------------------------- output
 
@@ -264,7 +270,7 @@ class EmotionBatch:
     def emotion_at(self, t_s: float) -> np.ndarray:
         """(n, 6) emotion intensities at ``t_s`` (a new array), capped at 5; the mood is not touched."""
         emotion = np.zeros((self.n_rows, _N))
-        if self._pad_on.any():
+        if self._pad_any:
             rows = np.flatnonzero(self._pad_on)
             settled = t_s - self._pad_t0_s[rows] >= self._pad_ramp_s[rows]
             if settled.all():
@@ -286,7 +292,18 @@ class EmotionBatch:
     @property
     def quiet(self) -> bool:
         """True when no row has an event or a PAD state (every emotion is 0; moods may not be)."""
-        return not self._ev_row.size and not self._pad_on.any()
+        return not self._ev_row.size and not self._pad_any
+
+    @property
+    def resting(self) -> bool:
+        """True when there is nothing to express: :attr:`quiet`, and every emotion and mood is 0."""
+        if self._ev_row.size or self._pad_any:
+            return False
+        if not self._emotion_zero:
+            self._emotion_zero = not self._emotion.any()
+        if not self._mood_zero:
+            self._mood_zero = not self.mood.any()
+        return self._emotion_zero and self._mood_zero
 
     def advance(self, t_s: float) -> np.ndarray:
         """Move to ``t_s``: integrate the moods and return the (n, 6) emotions there (do not modify them).
@@ -298,20 +315,24 @@ class EmotionBatch:
         if last is None:
             self._t_s = t
             self._emotion = self.emotion_at(t)
+            self._emotion_zero = False
             self._dirty = False
             return self._emotion
         if t < last:
             return self.emotion_at(t)
         if self._dirty:
             self._emotion = self.emotion_at(last)
+            self._emotion_zero = False
             self._dirty = False
         if t == last:
             return self._emotion
         dt = t - last
         n_steps = math.ceil(dt / self.mood_max_step_s) if dt > self.mood_max_step_s else 1
         step = dt / n_steps
-        if self.quiet and not self._emotion.any():
-            self.mood *= math.exp(-dt / self.mood_time_constant_s)  # no emotion: a plain decay
+        if self.quiet and (self._emotion_zero or not self._emotion.any()):
+            self._emotion_zero = True
+            if not self._mood_zero:
+                self.mood *= math.exp(-dt / self.mood_time_constant_s)  # no emotion: a plain decay
         else:
             previous = self._emotion
             for s in range(1, n_steps + 1):
@@ -319,6 +340,7 @@ class EmotionBatch:
                 mood_step(self.mood, previous, current, step, self.mood_time_constant_s, self.mood_gain)
                 previous = current
             self._emotion = previous
+            self._emotion_zero = self._mood_zero = False
         self._t_s = t
         if self._ev_row.size:
             alive = self._ev_time[:, 4] > t

@@ -194,7 +194,9 @@ class FacsBatch:
         if self._act_row.size:
             self._keep_actions(~np.isin(self._act_row, np.atleast_1d(rows)))
 
-    def set(self, rows: RowIndex, au: str | AUSpec, intensity: float | None = None, tau_s: float | None = None) -> None:
+    def set(
+        self, rows: RowIndex, au: str | AUSpec, intensity: float | None = None, *, tau_s: float | None = None
+    ) -> None:
         """Hold ``au`` (e.g. ``"AU12"``, ``"L12C"``) at ``intensity`` (0..5; default: the string's letter, else C).
 
         ``tau_s`` sets the channels' time constant (0 = jump).
@@ -211,7 +213,7 @@ class FacsBatch:
         self._settled = False
 
     def set_many(
-        self, rows: RowIndex, intensities: Mapping[str, float], speed: float | None = None, replace: bool = False
+        self, rows: RowIndex, intensities: Mapping[str, float], *, speed: float | None = None, replace: bool = False
     ) -> None:
         """Hold several AUs at once; ``speed`` (OpenFACS, 0..1 per tick at :attr:`tick_hz`) sets their tau.
 
@@ -282,10 +284,11 @@ class FacsBatch:
         rows: RowIndex,
         au: str | AUSpec,
         intensity: float | None = None,
-        start_s: float | None = None,
+        *,
         onset_s: float = 0.4,
         apex_s: float = 0.3,
         offset_s: float = 0.3,
+        start_s: float | None = None,
     ) -> TimedAction:
         """Play ``au`` once on ``rows`` with an onset/apex/offset envelope from ``start_s`` (default: now)."""
         spec = _spec(au)
@@ -410,13 +413,15 @@ class FacsEngine:
         """Time of the last :meth:`advance`."""
         return self.batch.time_s
 
-    def set(self, au: str | AUSpec, intensity: float | None = None, tau_s: float | None = None) -> None:
+    def set(self, au: str | AUSpec, intensity: float | None = None, *, tau_s: float | None = None) -> None:
         """Hold ``au`` at ``intensity`` (see :meth:`FacsBatch.set`)."""
-        self.batch.set(0, au, intensity, tau_s)
+        self.batch.set(0, au, intensity, tau_s=tau_s)
 
-    def set_many(self, intensities: Mapping[str, float], speed: float | None = None, replace: bool = False) -> None:
+    def set_many(
+        self, intensities: Mapping[str, float], *, speed: float | None = None, replace: bool = False
+    ) -> None:
         """Hold several AUs at once (see :meth:`FacsBatch.set_many`)."""
-        self.batch.set_many(0, intensities, speed, replace)
+        self.batch.set_many(0, intensities, speed=speed, replace=replace)
 
     def set_speed(self, speed: float, au: str | AUSpec | None = None) -> None:
         """Give every AU channel (or ``au``'s) the time constant of OpenFACS ``speed`` at :attr:`tick_hz`."""
@@ -430,13 +435,14 @@ class FacsEngine:
         self,
         au: str | AUSpec,
         intensity: float | None = None,
-        start_s: float | None = None,
+        *,
         onset_s: float = 0.4,
         apex_s: float = 0.3,
         offset_s: float = 0.3,
+        start_s: float | None = None,
     ) -> TimedAction:
         """Play ``au`` once with an onset/apex/offset envelope starting at ``start_s`` (default: now)."""
-        return self.batch.play(0, au, intensity, start_s, onset_s, apex_s, offset_s)
+        return self.batch.play(0, au, intensity, onset_s=onset_s, apex_s=apex_s, offset_s=offset_s, start_s=start_s)
 
     def advance(self, t_s: float) -> np.ndarray:
         """Move to time ``t_s`` (>= the previous time) and return the (62,) frame (reused buffer)."""

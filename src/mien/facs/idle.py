@@ -25,7 +25,7 @@ import numpy as np
 
 from mien.errors import InvalidValueError
 from mien.facs.catalogue import channel_index
-from mien.facs.counter_random import normal, uniform
+from mien.facs.counter_random import normal, stream_keys, uniform, uniform_from_keys
 
 __all__ = [
     "EYELID_WALK",
@@ -168,6 +168,42 @@ _NUMBERS = (
     "wobble_period_s",
 )
 _WALK_STREAMS = np.arange(2 * len(_WALKS), dtype=np.uint64)  # walk i: stream 2i (move?), 2i + 1 (direction)
+_WALK_PARAMS = tuple((w.a, w.b, w.step, w.move_probability) for w in _WALKS)
+_DRAW_BLOCK = 64
+"""Ticks of walk draws a batch of one row makes at a time (about 1 s at 60 Hz)."""
+_AU12L, _AU15L, _AU5L, _AU43L, _AU45L = (pair.start for pair in (_AU12, _AU15, _AU5, _AU43, _AU45))
+_ONE_ROW_GAINS = ("mouth", "eyelids", "neck_yaw", "neck_roll", "blink", "gaze", "wobble_yaw", "wobble_roll")
+
+
+@dataclass(frozen=True)
+class _OneRow:
+    """The gains and numbers of a batch of one row, as Python floats (see :meth:`IdleBatch.apply_row`)."""
+
+    mouth: float
+    eyelids: float
+    neck_yaw: float
+    neck_roll: float
+    blink: float
+    gaze: float
+    wobble_yaw: float
+    wobble_roll: float
+    tick_hz: float
+    blink_duration_s: float
+    saccade_s: float
+    wobble_frequency_hz: float
+    yaw_phase: float
+    roll_phase: float
+
+
+@dataclass(frozen=True)
+class _OneRowEvents:
+    """The blink and fixation state of a batch of one row, as Python floats (names of :class:`IdleBatch`)."""
+
+    _blink_start: float
+    _fix_start: float
+    _fix_end: float
+    _gaze_from: float
+    _gaze_to: float
 
 
 def _blink_interval(
@@ -224,14 +260,24 @@ class IdleBatch:
         self._gaze_from = np.zeros(0)
         self._gaze_to = np.zeros(0)
         self._phase = np.zeros((0, 2))
+        self._walk_keys = np.zeros((0, len(_WALK_STREAMS)), np.uint64)  # stream_keys(seed, walk streams) per row
         self._amp: dict[str, np.ndarray] = {}
         self._walking = self._blinking = self._gazing = self._wobbling = False
+        self._one: _OneRow | None = None  # the gains of a batch of one row, as Python floats
+        self._events_one: _OneRowEvents | None = None  # its blink and fixation state (None: read the arrays)
+        self._draws: list[list[float]] = []  # a batch of one: walk draws of ticks _draws_from, _draws_from + 1, ...
+        self._draws_from = 0
         self.add_rows(seeds, settings if settings is not None else IdleSettings())
 
     @property
     def n_rows(self) -> int:
         """Number of rows."""
         return int(self.seeds.shape[0])
+
+    @property
+    def moving(self) -> bool:
+        """True when some row has some idle part on (else :meth:`apply` adds nothing)."""
+        return self._walking or self._blinking or self._gazing or self._wobbling
 
     def add_rows(self, seeds: np.ndarray, settings: IdleSettings | None = None, t_s: float = 0.0) -> None:
         """Append rows for ``seeds`` ((k,) non-negative ints) with ``settings``, starting at ``t_s``."""
@@ -250,6 +296,7 @@ class IdleBatch:
             setattr(self, name, np.concatenate([array, np.zeros(count, array.dtype)]))
         self._m = np.concatenate([self._m, np.zeros((count, len(_WALKS)))])
         self._phase = np.concatenate([self._phase, np.zeros((count, 2))])
+        self._walk_keys = np.concatenate([self._walk_keys, np.zeros((count, len(_WALK_STREAMS)), np.uint64)])
         self.reset_rows(np.arange(first, first + count), np.asarray(seeds), settings, t_s)
 
     def reset_rows(
@@ -284,6 +331,8 @@ class IdleBatch:
         self._gaze_from[rows] = 0.0
         self._gaze_to[rows] = yaw
         self._phase[rows] = _wobble_phase(seed[:, None])
+        self._walk_keys[rows] = stream_keys(seed[:, None], _WALK_STREAMS[None, :])
+        self._draws = []
         self._update_amplitudes()
 
     def _update_amplitudes(self) -> None:
@@ -304,6 +353,15 @@ class IdleBatch:
         self._blinking = bool(on["blink"].any())
         self._gazing = bool(on["gaze"].any())
         self._wobbling = bool(on["wobble"].any())
+        self._one = None
+        self._events_one = None
+        if self.n_rows == 1:
+            amp = self._amp
+            self._one = _OneRow(
+                *(float(amp[key][0]) for key in _ONE_ROW_GAINS),
+                *(float(num[key][0]) for key in ("tick_hz", "blink_duration_s", "saccade_s", "wobble_frequency_hz")),
+                *self._phase[0].tolist(),
+            )
 
     def walk_positions(self, t_s: float) -> np.ndarray:
         """(n, 5) positions of the walks (mouth L, mouth R, eyelids, neck twist, neck side) at ``t_s``.
@@ -315,8 +373,9 @@ class IdleBatch:
         if not lag.size:
             return self._m
         m = self._m
+        keys = self._walk_keys
         for j in range(int(lag.max())):  # one pass per tick due (one at 60 Hz steps)
-            u = uniform(self.seeds[:, None], _WALK_STREAMS[None, :], (self._tick + j).astype(np.uint64)[:, None])
+            u = uniform_from_keys(keys, (self._tick + j).astype(np.uint64)[:, None])
             move = u[:, 0::2] < _WALK_MOVE
             if j >= lag.min():
                 move &= (lag > j)[:, None]  # rows with fewer ticks due stop here
@@ -330,6 +389,7 @@ class IdleBatch:
 
     def blink(self, t_s: float) -> np.ndarray:
         """(n,) lid closure 0..1 from spontaneous blinks at ``t_s`` (times must not decrease)."""
+        self._events_one = None
         duration = self._num["blink_duration_s"]
         due = t_s >= self._blink_start + duration
         while due.any():
@@ -348,6 +408,7 @@ class IdleBatch:
 
     def gaze_yaw(self, t_s: float) -> np.ndarray:
         """(n,) gaze yaw (degrees) from fixation shifts at ``t_s`` (times must not decrease)."""
+        self._events_one = None
         due = t_s >= self._fix_end
         while due.any():
             rows = np.flatnonzero(due)
@@ -371,6 +432,11 @@ class IdleBatch:
         ``mouth_scale`` ((n,) or scalar, 0..1) lets idle mouth motion yield to a laughing or speaking mouth;
         blinks combine by max with the expression's AU45, so a blink during a smile still closes the eyes.
         """
+        if self._one is not None and isinstance(mouth_scale, float | int):
+            values = frames[0].tolist()
+            self.apply_row(t_s, values, float(mouth_scale))
+            frames[0] = values
+            return
         amp = self._amp
         if self._walking:
             m = self.walk_positions(t_s)
@@ -393,6 +459,82 @@ class IdleBatch:
             angle = (2.0 * math.pi * t_s) * self._num["wobble_frequency_hz"]
             frames[:, _YAW] += amp["wobble_yaw"] * np.sin(angle + self._phase[:, 0])
             frames[:, _ROLL] += amp["wobble_roll"] * np.sin(angle / 1.37 + self._phase[:, 1])
+
+
+    def apply_row(self, t_s: float, values: list[float], mouth_scale: float = 1.0) -> None:
+        """:meth:`apply` for a batch of one row, into its (62,) face frame as a list of floats, in place.
+
+        The same arithmetic on Python floats: numpy costs about a microsecond a call whatever the array's
+        size, which for one row is most of the cost. The walks draw their random numbers :data:`_DRAW_BLOCK`
+        ticks at a time; a new blink or fixation is drawn by the vectorised methods (the same code).
+        """
+        one = self._one
+        if one is None:
+            raise InvalidValueError("rows", self.n_rows, "a batch of one row for apply_row (else apply)")
+        if self._walking:
+            m = self._walk_one(t_s, one.tick_hz)
+            mouth_gain = one.mouth * mouth_scale
+            left, right = m[0] * mouth_gain, m[1] * mouth_gain
+            values[_AU12L] += max(left, 0.0)
+            values[_AU12L + 1] += max(right, 0.0)
+            values[_AU15L] += max(-left, 0.0)
+            values[_AU15L + 1] += max(-right, 0.0)
+            lids = m[2] * one.eyelids
+            values[_AU5L] += max(lids, 0.0)
+            values[_AU5L + 1] += max(lids, 0.0)
+            values[_AU43L] += max(-lids, 0.0)
+            values[_AU43L + 1] += max(-lids, 0.0)
+            values[_YAW] += m[3] * one.neck_yaw
+            values[_ROLL] += m[4] * one.neck_roll
+        events = self._events_one
+        if events is None:
+            events = self._events_one = _OneRowEvents(
+                *(float(getattr(self, name)[0]) for name in _OneRowEvents.__dataclass_fields__)
+            )
+        if self._blinking:
+            duration = one.blink_duration_s
+            if t_s >= events._blink_start + duration:
+                level = float(self.blink(t_s)[0])  # the next blink is drawn
+            else:
+                elapsed = t_s - events._blink_start
+                half = 0.5 * duration
+                level = 1.0 - abs(elapsed - half) / half if 0.0 < elapsed < duration else 0.0
+            level *= one.blink
+            values[_AU45L] = max(values[_AU45L], level)
+            values[_AU45L + 1] = max(values[_AU45L + 1], level)
+        if self._gazing:
+            if t_s >= events._fix_end or one.saccade_s <= 0.0:
+                gaze = float(self.gaze_yaw(t_s)[0])  # the next fixation is drawn
+            else:
+                progress = min((t_s - events._fix_start) / one.saccade_s, 1.0)
+                gaze = events._gaze_from + (events._gaze_to - events._gaze_from) * progress
+            values[_GAZE_YAW] += one.gaze * gaze
+        if self._wobbling:
+            angle = (2.0 * math.pi * t_s) * one.wobble_frequency_hz
+            values[_YAW] += one.wobble_yaw * math.sin(angle + one.yaw_phase)
+            values[_ROLL] += one.wobble_roll * math.sin(angle / 1.37 + one.roll_phase)
+
+    def _walk_one(self, t_s: float, tick_hz: float) -> list[float]:
+        """:meth:`walk_positions` of a batch of one row, on Python floats (the same steps and draws)."""
+        tick = int(self._tick[0])
+        target = math.floor(t_s * tick_hz + _TICK_SLACK)
+        m = self._m[0].tolist()
+        if target <= tick:
+            return m
+        draws = self._draws
+        for k in range(tick, target):
+            if not self._draws_from <= k < self._draws_from + len(draws):
+                ticks = np.arange(k, k + _DRAW_BLOCK, dtype=np.uint64)[:, None]
+                draws = self._draws = uniform_from_keys(self._walk_keys[0][None, :], ticks).tolist()
+                self._draws_from = k
+            u = draws[k - self._draws_from]
+            for i, (a, b, step, move) in enumerate(_WALK_PARAMS):
+                if u[2 * i] < move:
+                    stepped = m[i] + step if u[2 * i + 1] < 1.0 - (a + b * m[i]) else m[i] - step
+                    m[i] = max(min(stepped, 1.0), -1.0)
+        self._m[0] = m
+        self._tick[0] = target
+        return m
 
 
 class Idle:
