@@ -57,7 +57,7 @@ def batch_step_ms(repeats: int = 5, n_steps: int = 300) -> list[float]:
         times = []
         for i in range(n_steps):
             if i % 90 == 0:
-                batch.emote(slice(None), ("joy", "anger", "surprise")[i // 90 % 3], 1.2, i / FPS)
+                batch.emote(slice(None), ("joy", "anger", "surprise")[i // 90 % 3], 1.2, start_s=i / FPS)
             t0 = time.perf_counter()
             batch.step(i / FPS)
             times.append(time.perf_counter() - t0)

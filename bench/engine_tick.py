@@ -108,8 +108,10 @@ def server_ticks(n_ticks: int, before: ModuleType) -> tuple[list[float], list[fl
     olds = []
     for k in range(N_CHARACTERS):
         basis = "feature_points" if k in feature_rows else "facs"
-        batch.add_character(seed=k, idle=IdleSettings() if k in idle_rows else False, expression_basis=basis)
         mode = "pad" if k in pad_rows else "categorical"
+        batch.add_character(
+            seed=k, idle=IdleSettings() if k in idle_rows else False, expression_basis=basis, emotion_mode=mode
+        )
         olds.append(before.Character(seed=k, idle=k in idle_rows, expression_basis=basis, emotion_mode=mode))
     driver = RigDriver()
     mapping = AUMapping.default()
@@ -137,13 +139,13 @@ def server_ticks(n_ticks: int, before: ModuleType) -> tuple[list[float], list[fl
 
         t0, c0 = time.perf_counter(), time.process_time()
         batch.set_speed(rows, 0.3)
-        batch.set_aus(rows, message)
+        batch.set_aus(rows, message, replace=True)
         for row, emotion in emote:
             batch.emote(row, emotion, 1.2)
         if pad is not None:
             batch.set_pad(pad_rows, *pad)
         if play is not None:
-            batch.play_au(play, "AU9", 3.0, 0.2, 0.3, 0.3)
+            batch.play_au(play, "AU9", 3.0, onset_s=0.2, apex_s=0.3, offset_s=0.3)
         if laugh is not None:
             batch.play_clip(laugh[0], laugh[1])
         frames = batch.step(t)

@@ -42,7 +42,7 @@ def test_weights_equal_the_mapping_for_any_batch_size():
 def test_out_buffer_is_filled_in_place_tick_after_tick():
     driver = RigDriver()
     batch = CharacterBatch(np.arange(5))
-    batch.emote(slice(None), "joy", 1.5, 0.0)
+    batch.emote(slice(None), "joy", 1.5, start_s=0.0)
     out = np.empty((5, 52), np.float32)
     pose = np.empty((5, 5))
     smile = ARKIT_NAMES.index("mouthSmileLeft")

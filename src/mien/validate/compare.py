@@ -257,7 +257,9 @@ def _expression_player(expression: str, intensity: float) -> Callable[[Any, Any]
     def play(character: Any, envelope: Any) -> None:
         for spec in specs:  # an AU without a letter plays at C (3) scaled by the intensity
             value = min(5.0, (spec.intensity or 3.0) * intensity)
-            character.play_au(spec, value, envelope.onset_s, envelope.hold_s, envelope.decay_s, start_s=0.0)
+            character.play_au(
+                spec, value, onset_s=envelope.onset_s, apex_s=envelope.hold_s, offset_s=envelope.decay_s, start_s=0.0
+            )
 
     return play
 

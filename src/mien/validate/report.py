@@ -10,7 +10,6 @@ complete-looking report.
 
 from __future__ import annotations
 
-import hashlib
 import html
 import json
 import platform
@@ -24,6 +23,7 @@ import numpy as np
 
 from mien.facs.catalogue import OPENFACS_AUS
 from mien.facs.prototypes import PROTOTYPES_VERSION
+from mien.fileio.hashing import file_sha256
 from mien.htmlpage import STYLE as _STYLE
 from mien.htmlpage import img as _img
 from mien.htmlpage import library_versions
@@ -49,11 +49,7 @@ _LIBRARIES = ("numpy", "scipy", "mediapipe", "ai-edge-litert", "moderngl", "pill
 def _sha256(path: str | Path | None) -> str:
     if path is None or not Path(path).is_file():
         return ""
-    digest = hashlib.sha256()
-    with open(path, "rb") as handle:
-        for block in iter(lambda: handle.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
+    return file_sha256(path)
 
 
 def environment(models: Mapping[str, str | None]) -> dict[str, Any]:
