@@ -105,6 +105,16 @@ def test_head_and_identity(d: Path) -> None:
     assert heads == ["ict:a,builtin", "builtin:b"]
 
 
+def test_a_head_file_stays_one_spec(d: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A head file's path may hold no identity: ``--head face.glb`` and ``--head file:face.glb`` reach load_head
+    whole."""
+    head = d / "face.glb"
+    assert main(["export", str(d / "smile.csv"), "-o", str(head), "--head", "builtin"]) == 0
+    for spec in (str(head), f"file:{head}"):
+        args, notes = parsed(f"render joy --head {spec}", d)
+        assert (args["head"], args["identity"], notes) == (spec, None, [])
+
+
 def _subparsers(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentParser]:
     (action,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
     return dict(action.choices)

@@ -33,7 +33,7 @@ def add_scene_options(parser: argparse.ArgumentParser, camera: str = "portrait")
     add_head(
         parser,
         help="head: default (ICT-FaceKit if installed, else builtin), builtin or ict, with an optional identity "
-        "(face morphology: builtin:b, ict:a, ict:mean...)",
+        "(face morphology: builtin:b, ict:a, ict:mean...), or a head file (.glb, .gltf, .vrm, a folder of .obj)",
     )
     parser.add_argument(
         "--camera",

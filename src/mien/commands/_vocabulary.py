@@ -191,7 +191,8 @@ def add_output(
 
 
 def head_spec(text: str) -> tuple[str, str | None]:
-    """argparse type: ``HEAD[:IDENTITY]`` -> ``(head, identity or None)``; an unknown head is refused.
+    """argparse type: ``HEAD[:IDENTITY]`` -> ``(head, identity or None)``, as :func:`mien.rig.heads.load_head`
+    takes them; an unknown head is refused. A head file (``face.glb``, ``file:PATH``) stays one spec.
 
     >>> head_spec("builtin:b")
     ('builtin', 'b')
@@ -199,13 +200,16 @@ def head_spec(text: str) -> tuple[str, str | None]:
     from mien.errors import MienError
     from mien.rig.heads import parse_head_spec
 
-    _, sep, identity = text.strip().partition(":")
-    if sep and (not identity.strip() or ":" in identity):
-        raise argparse.ArgumentTypeError(f"head {text!r}: give HEAD or HEAD:IDENTITY, e.g. builtin or ict:b")
+    spec = text.strip()
     try:
-        return parse_head_spec(text.strip())
+        head, identity = parse_head_spec(spec)
     except MienError as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
+    if head == "file":
+        return spec, None  # a path is its own name; load_head reads it from the spec
+    if spec.endswith(":") or (identity is not None and ":" in identity):
+        raise argparse.ArgumentTypeError(f"head {text!r}: give HEAD or HEAD:IDENTITY, e.g. builtin or ict:b")
+    return head, identity
 
 
 def head_list(text: str) -> str:

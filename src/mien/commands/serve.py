@@ -43,10 +43,7 @@ def run(args: argparse.Namespace) -> int:
     import math
 
     from mien.errors import InvalidValueError, MienError
-    from mien.rig.heads import HEADS
 
-    if args.head not in HEADS:
-        raise InvalidValueError("--head", args.head, f"one of {', '.join(HEADS)}")
     if not (math.isfinite(args.tick_hz) and 1.0 <= args.tick_hz <= 1000.0):
         raise InvalidValueError("--tick-hz", args.tick_hz, "a clock rate between 1 and 1000 Hz")
     for option, port in (("--udp-port", args.udp_port), ("--http-port", args.http_port)):
