@@ -7,7 +7,6 @@ place (one ``rename`` on the same file system). Any failure removes the temporar
 
 from __future__ import annotations
 
-import hashlib
 import math
 import os
 import re
@@ -21,6 +20,7 @@ from pathlib import Path, PurePosixPath
 from typing import Any
 
 from mien.errors import InvalidValueError, UnknownNameError
+from mien.fileio.hashing import file_sha256
 
 __all__ = ["CHUNK_BYTES", "SOURCES", "AssetSource", "fetch_asset", "load_sources"]
 
@@ -78,7 +78,6 @@ def _download(url: str, target: Path, show_progress: bool, timeout_s: float, lab
     if not re.match(r"(?i)^(https?|file)://", url):
         raise InvalidValueError("url", url, "an http://, https:// or file:// URL")
     request = urllib.request.Request(url, headers={"User-Agent": "mien-assets-fetch"})
-    digest = hashlib.sha256()
     try:
         with urllib.request.urlopen(request, timeout=timeout_s) as response, target.open("wb") as handle:
             length = int(response.headers.get("Content-Length") or 0) if hasattr(response, "headers") else 0
@@ -86,7 +85,6 @@ def _download(url: str, target: Path, show_progress: bool, timeout_s: float, lab
             size = f" ({length / 1024**2:.0f} MiB)" if length else ""
             for block in progress(_chunks(response), total=total, desc=f"downloading {label}{size}",
                                   enabled=show_progress):  # fmt: skip
-                digest.update(block)
                 handle.write(block)
     except urllib.error.HTTPError as exc:
         raise InvalidValueError("url", url, f"a downloadable archive (the server answered HTTP {exc.code} "
@@ -98,7 +96,7 @@ def _download(url: str, target: Path, show_progress: bool, timeout_s: float, lab
         ) from None
     except (TimeoutError, ConnectionError) as exc:
         raise InvalidValueError("url", url, f"a server that answers ({exc}); try again or pass --url") from None
-    return digest.hexdigest()
+    return file_sha256(target)
 
 
 def _unpack(archive: Path, folder: Path, marker: str, url: str) -> Path:

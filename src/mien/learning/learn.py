@@ -25,8 +25,6 @@ the library (the generator then falls back to the built-in curve).
 from __future__ import annotations
 
 import csv
-import hashlib
-import json
 import os
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Future
@@ -38,6 +36,7 @@ import numpy as np
 
 from mien.errors import InvalidValueError, MienError, MissingExtraError
 from mien.facs.clip import Clip, interpolate_frames
+from mien.fileio.hashing import key_sha256
 from mien.laughter.library import LaughLibrary, LibraryMetadata, utc_now
 from mien.laughter.names import CONTROLLER_NAMES, LAUGH_TYPES
 from mien.progress import progress
@@ -224,7 +223,7 @@ def _checkpoint_path(work: Path, job: _VideoJob) -> Path:
         "model": job.model,
         "version": CHECKPOINT_VERSION,
     }
-    digest = hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:24]
+    digest = key_sha256(key, 24)
     return work / "videos" / f"{Path(job.video).stem}-{digest}.npz"
 
 

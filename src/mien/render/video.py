@@ -1,9 +1,10 @@
 """Writing frames to H.264 MP4 (imageio-ffmpeg's bundled ffmpeg) and PNG (Pillow); reading MP4 facts (PyAV).
 
 :class:`Mp4Writer` pipes raw RGB frames into an ffmpeg subprocess from a background thread, so the caller
-renders the next frame while ffmpeg encodes (two cores busy). The video is written to ``<name>.tmp.mp4``
-and renamed when complete; if the caller fails midway, the encoder is closed cleanly so the frames so far
-form a valid, shorter video kept as ``<name>.partial.mp4``, and the error propagates.
+renders the next frame while ffmpeg encodes (two cores busy). The video is written to a temporary file next to
+it (:func:`mien.fileio.streams.temporary_path`) and renamed when complete; if the caller fails midway, the
+encoder is closed cleanly so the frames so far form a valid, shorter video kept as ``<name>.partial.mp4``,
+and the error propagates.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from typing import IO
 import numpy as np
 
 from mien.errors import InvalidValueError, MienError, MissingExtraError
+from mien.fileio.streams import atomic_path, temporary_path
 from mien.progress import progress as progress_bar
 
 __all__ = ["Mp4Writer", "VideoInfo", "read_video_info", "write_mp4", "write_png"]
@@ -81,7 +83,9 @@ class Mp4Writer:
         if self.path.suffix.lower() != ".mp4":
             raise InvalidValueError("path", str(path), "a file name ending in .mp4")
         self.fps, self.crf, self.preset = float(fps), crf, preset
-        self.temp_path = self.path.with_name(self.path.stem + ".tmp.mp4")
+        self.temp_path: Path | None = None
+        """Where ffmpeg writes: a :func:`~mien.fileio.streams.temporary_path` next to ``path`` once the first
+        frame arrives, renamed onto ``path`` by :meth:`close`."""
         self.n_frames = 0
         self.encode_wait_s = 0.0
         """Seconds the feeding thread spent blocked on ffmpeg (time ffmpeg was the bottleneck)."""
@@ -95,10 +99,12 @@ class Mp4Writer:
     def _start(self, width: int, height: int) -> None:
         if width % 2 or height % 2:
             raise InvalidValueError("frame size", (width, height), "even width and height (H.264 yuv420p)")
+        executable = _ffmpeg_exe()
         self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.temp_path = temporary_path(self.path)
         self._size = (width, height)
         command = [
-            _ffmpeg_exe(),
+            executable,
             *("-y", "-loglevel", "error", "-nostats"),
             *("-f", "rawvideo", "-pix_fmt", "rgb24", "-s", f"{width}x{height}", "-r", f"{self.fps:g}", "-i", "-"),
             *("-an", "-c:v", "libx264", "-pix_fmt", "yuv420p", "-crf", str(self.crf), "-preset", self.preset),
@@ -160,6 +166,7 @@ class Mp4Writer:
         status = self._finish()
         if self._process is None:
             raise InvalidValueError("frames", 0, "at least one frame to encode")
+        assert self.temp_path is not None  # set with the process
         if status != 0 or self._error is not None:
             log = self._ffmpeg_log()
             self._cleanup()
@@ -173,6 +180,8 @@ class Mp4Writer:
         """Close the encoder after a failure; keeps the frames so far as ``<stem>.partial.mp4`` (returned)."""
         status = self._finish()
         self._cleanup()
+        if self.temp_path is None:
+            return None
         if self._process is None or status != 0 or not self.temp_path.exists() or self.n_frames == 0:
             self.temp_path.unlink(missing_ok=True)
             return None
@@ -237,7 +246,8 @@ def write_png(image: np.ndarray, path: str | os.PathLike[str], compress_level: i
         raise MissingExtraError("pillow", "render") from None
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    Image.fromarray(image).save(path, format="PNG", compress_level=compress_level)
+    with atomic_path(path) as temporary:
+        Image.fromarray(image).save(temporary, format="PNG", compress_level=compress_level)
     return path
 
 

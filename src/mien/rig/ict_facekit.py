@@ -30,7 +30,6 @@ Details" tables, https://github.com/ICT-VGL/ICT-FaceKit); ``vertex_indices.json`
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import sys
@@ -40,6 +39,7 @@ import numpy as np
 
 from mien.errors import InvalidValueError, MissingAssetError
 from mien.facs.arkit import ARKIT_NAMES
+from mien.fileio.hashing import key_sha256
 from mien.paths import cache_dir, require_asset
 from mien.progress import progress
 from mien.rig.model import MorphTarget, Rig
@@ -217,7 +217,7 @@ def ict_cache_file(path: str | os.PathLike[str] | None = None) -> Path:
     for name in _REQUIRED_FILES:
         stat = (model / name).stat()
         parts.append(f"{name}:{stat.st_size}:{stat.st_mtime_ns}")
-    key = hashlib.sha1("\n".join(parts).encode()).hexdigest()[:20]
+    key = key_sha256(parts, 20)
     return cache_dir("ict-facekit") / f"{key}.npz"
 
 

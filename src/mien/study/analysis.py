@@ -452,6 +452,6 @@ def analyze_csv(path: str | os.PathLike[str], design_factors: Sequence[str] | No
         raise InvalidValueError(
             "answers CSV", str(file), f"a CSV file written by 'mien study export' ({reason})"
         ) from None
-    from mien.study.stimuli import file_sha256
+    from mien.fileio.hashing import file_sha256
 
     return analyze(frame, design_factors, source=str(file), source_sha256=file_sha256(file), _from_csv=True)

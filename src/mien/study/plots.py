@@ -23,6 +23,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from mien.fileio.streams import atomic_path
+
 if TYPE_CHECKING:
     from mien.study.analysis import StudyAnalysis
 
@@ -33,11 +35,11 @@ def _save(figure: Any, path: str | os.PathLike[str]) -> Path:
     from mien.plot import pyplot
 
     target = Path(path)
-    partial = target.with_name(f".{target.name}.partial.png")
     figure.tight_layout()
-    figure.savefig(partial, dpi=100, format="png")
+    with atomic_path(target) as temporary:
+        figure.savefig(temporary, dpi=100, format="png")
     pyplot().close(figure)
-    return partial.replace(target)
+    return target
 
 
 def _short(question: str) -> str:

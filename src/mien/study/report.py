@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from mien.fileio.streams import write_text
 from mien.htmlpage import STYLE, img, library_versions, num, pct, table
 
 if TYPE_CHECKING:
@@ -263,7 +264,7 @@ def _provenance(analysis: StudyAnalysis, machine: MachineJudgement | str | None)
         "date": time.strftime("%Y-%m-%d %H:%M:%S %Z"),
     }
     if machine is not None and not isinstance(machine, str):
-        from mien.study.stimuli import file_sha256
+        from mien.fileio.hashing import file_sha256
 
         info["detector"] = machine.result.detector
         info["models"] = {
@@ -359,9 +360,8 @@ def write_report(
     if machine is None and stimuli is not None:
         machine = _judge(Path(stimuli), landmarker, emotion_model, progress)
     figures = _figures(analysis, folder)
-    partial = page.with_name(f".{page.name}.partial")
-    partial.write_text(render_report(analysis, figures, machine), encoding="utf-8")
-    return partial.replace(page)
+    write_text(render_report(analysis, figures, machine), page)
+    return page
 
 
 def _judge(

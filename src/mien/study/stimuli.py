@@ -15,7 +15,6 @@ next run resumes. ``manifest.json`` is written last, atomically.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import shutil
@@ -25,6 +24,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from mien.errors import InvalidValueError, MissingAssetError
+from mien.fileio.hashing import file_sha256
+from mien.fileio.streams import atomic_path, write_text
 
 if TYPE_CHECKING:
     import numpy as np
@@ -49,15 +50,6 @@ class StimuliResult:
     """Stimuli rendered or copied in this run."""
     skipped: int
     """Stimuli kept from an earlier run (record and hash matched)."""
-
-
-def file_sha256(path: str | os.PathLike[str]) -> str:
-    """Hex SHA-256 of a file's bytes (read in 1 MiB chunks)."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as handle:
-        for chunk in iter(lambda: handle.read(1 << 20), b""):
-            digest.update(chunk)
-    return digest.hexdigest()
 
 
 def check_video(path: str | os.PathLike[str]) -> tuple[float, float]:
@@ -119,9 +111,7 @@ def _finished(out: Path, spec: StimulusSpec, key: str) -> dict[str, Any] | None:
 
 
 def _write_json_atomic(path: Path, data: Any) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(data, indent=2) + "\n")
-    os.replace(tmp, path)
+    write_text(json.dumps(data, indent=2) + "\n", path)
 
 
 class _Scenes:
@@ -231,9 +221,8 @@ def make_stimuli(
                 suffix = Path(spec.file).suffix.lower() if spec.file is not None else ".mp4"
                 video = folder / f"{spec.id}{suffix}"
                 if spec.file is not None:
-                    tmp = video.with_name(video.name + ".tmp")
-                    shutil.copyfile(spec.file, tmp)
-                    os.replace(tmp, video)
+                    with atomic_path(video) as temporary:
+                        shutil.copyfile(spec.file, temporary)
                     duration_s, fps = supplied[spec.id]
                 else:
                     duration_s, fps = _render(design, spec, scenes, video)

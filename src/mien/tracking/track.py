@@ -16,7 +16,6 @@ size and modification time, the model file's SHA-256 and the tracker options, so
 
 from __future__ import annotations
 
-import hashlib
 import itertools
 import json
 import os
@@ -31,6 +30,8 @@ import numpy as np
 from mien.errors import InvalidValueError
 from mien.facs.arkit import ARKIT_NAMES
 from mien.facs.clip import resample_on_times
+from mien.fileio.hashing import file_sha256, key_sha256
+from mien.fileio.streams import write_text
 from mien.paths import cache_dir, require_asset
 from mien.progress import progress
 from mien.tracking.landmarker import MIN_CONFIDENCE, N_LANDMARKS, head_pose_deg
@@ -173,7 +174,7 @@ class Track:
             data: dict[str, Any] = self.meta()
             for key, value in self.arrays().items():
                 data[key] = _json_array(value)
-            out.write_text(json.dumps(data, separators=(",", ":")), encoding="utf-8")
+            write_text(json.dumps(data, separators=(",", ":")), out)
         else:
             raise InvalidValueError("output", str(out), "a path ending in .npz or .json")
         return out
@@ -296,11 +297,7 @@ def apply_gaps(raw: Track, max_gap_s: float = MAX_GAP_S) -> Track:
 
 @cache
 def _file_sha256(path: str, size: int, mtime_ns: int) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as handle:
-        for block in iter(lambda: handle.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
+    return file_sha256(path)  # cached per (size, mtime): the model is hashed once per process
 
 
 def _cache_key(video: Path, model: Path, min_confidence: float) -> str:
@@ -312,7 +309,7 @@ def _cache_key(video: Path, model: Path, min_confidence: float) -> str:
         "model_sha256": _file_sha256(str(model), model_stat.st_size, model_stat.st_mtime_ns),
         "options": {"num_faces": 1, "min_confidence": min_confidence, "version": TRACKER_VERSION},
     }
-    return hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:32]
+    return key_sha256(key, 32)
 
 
 def track_video(
