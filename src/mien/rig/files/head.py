@@ -203,33 +203,46 @@ def _components(n: int, triangles: np.ndarray) -> np.ndarray:
     return np.array([find(i) for i in range(n)])
 
 
-def _eyeball_parts(positions: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
-    """Two mirror-image sphere-like closed parts of one mesh: (2, 3) centres (left by +x first) and their ids."""
+def _eyeball_parts(positions: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]] | None:
+    """Two mirror-image eyeballs among the closed parts of one mesh: (2, 3) centres (+x first) and their vertex ids.
+
+    A part is eyeball-like when a sphere fits it (rms residual under 6% of the radius: a cornea bulges) and it
+    spans about a diameter along every axis; concentric parts (sclera and iris shells) join one eye.
+    """
     labels = _components(len(positions), triangles)
-    spheres = []
+    spheres: list[tuple[np.ndarray, float, np.ndarray]] = []
     for label in np.unique(labels):
         ids = np.flatnonzero(labels == label)
         if len(ids) < 40:
             continue
         centre, radius, residual = _sphere(positions[ids])
         extent = np.ptp(positions[ids], axis=0)
-        if radius > 0 and residual < 0.03 * radius and np.all(extent > 1.5 * radius):
-            spheres.append((len(ids), centre, radius, ids))
+        if radius > 0 and residual < 0.06 * radius and np.all(extent > 1.5 * radius):
+            spheres.append((centre, radius, ids))
+    eyes: list[tuple[np.ndarray, float, np.ndarray]] = []
+    for centre, radius, ids in sorted(spheres, key=lambda s: -len(s[2])):
+        for k, (c, r, group) in enumerate(eyes):
+            if np.linalg.norm(centre - c) < 0.3 * r and abs(radius - r) < 0.3 * r:
+                eyes[k] = (c, r, np.concatenate([group, ids]))
+                break
+        else:
+            eyes.append((centre, radius, ids))
     best = None
-    for i, (n_a, c_a, r_a, ids_a) in enumerate(spheres):
-        for n_b, c_b, r_b, ids_b in spheres[i + 1 :]:
+    for i, (c_a, r_a, ids_a) in enumerate(eyes):
+        for c_b, r_b, ids_b in eyes[i + 1 :]:
             d = float(np.linalg.norm(c_a - c_b))
             mirrored = abs(c_a[1] - c_b[1]) < 0.2 * r_a and abs(c_a[2] - c_b[2]) < 0.2 * r_a
-            if abs(r_a - r_b) < 0.1 * r_a and mirrored and 3.0 < d / r_a < 7.0:
-                score = n_a + n_b
+            if abs(r_a - r_b) < 0.15 * r_a and mirrored and 3.0 < d / r_a < 7.0:
+                score = len(ids_a) + len(ids_b)
                 if best is None or score > best[0]:
-                    best = (score, c_a, c_b, ids_a, ids_b)
+                    best = (score, ids_a, ids_b)
     if best is None:
         return None
-    _, c_a, c_b, ids_a, ids_b = best
-    if c_a[0] < c_b[0]:
-        c_a, c_b, ids_a, ids_b = c_b, c_a, ids_b, ids_a
-    return np.stack([c_a, c_b]), np.array([ids_a, ids_b], dtype=object)
+    _, ids_a, ids_b = best
+    centres = [_sphere(positions[ids])[0] for ids in (ids_a, ids_b)]
+    if centres[0][0] < centres[1][0]:
+        centres, ids_a, ids_b = centres[::-1], ids_b, ids_a
+    return np.stack(centres), [np.sort(ids_a), np.sort(ids_b)]
 
 
 def _weld(part: _Part) -> tuple[_Part, np.ndarray]:
@@ -567,7 +580,8 @@ def load_head_file(
         width = float(hi[0] - lo[0])
         centre = np.array([(lo[0] + hi[0]) / 2, hi[1] - 0.3 * (hi[1] - lo[1]), hi[2] - 0.35 * width])
         half = 0.22 * width
-        eye_centres = np.stack([[*centre, half, 0, 0], centre - [half, 0, 0]])
+        step = np.array([half, 0.0, 0.0])
+        eye_centres = np.stack([centre + step, centre - step])
         eyes = ("estimated from the region the shapes move (no eye mesh, joint or eyeball found): 30% down from "
                 "its top, eyes 44% of its width apart")  # fmt: skip
 
