@@ -14,9 +14,12 @@ from __future__ import annotations
 import json
 import socket
 from collections.abc import Mapping
+from contextlib import ExitStack
 from typing import Any
+from urllib.parse import urlencode
 
 from mien.errors import InvalidValueError, MienError
+from mien.extras import require
 from mien.server.protocol import OPENFACS_KEYS, Frame, decode_frame
 
 __all__ = ["AsyncWebSocketClient", "UdpClient", "WebSocketClient", "openfacs_message"]
@@ -82,8 +85,6 @@ class UdpClient:
 
 
 def _ws_url(url: str, character: str | None, token: str | None) -> str:
-    from urllib.parse import urlencode
-
     if not url.startswith(("ws://", "wss://")):
         raise InvalidValueError("url", url, "a ws:// or wss:// URL such as ws://127.0.0.1:8000/ws")
     query = urlencode({k: v for k, v in (("character", character), ("token", token)) if v is not None})
@@ -99,17 +100,14 @@ class WebSocketClient:
     def __init__(
         self, url: str, character: str | None = None, token: str | None = None, open_timeout_s: float = 5.0
     ) -> None:
-        from contextlib import ExitStack
-
-        from websockets.exceptions import InvalidHandshake
-        from websockets.sync.client import connect
-
+        connect = require("websockets.sync.client", "serve").connect  # MissingExtraError without the extra
+        invalid_handshake = require("websockets.exceptions", "serve").InvalidHandshake
         self._stack = ExitStack()
         try:
             self._ws = self._stack.enter_context(
                 connect(_ws_url(url, character, token), open_timeout=open_timeout_s, max_size=2**20)
             )
-        except (OSError, InvalidHandshake) as exc:
+        except (OSError, invalid_handshake) as exc:
             raise MienError(
                 f"cannot connect to {url}: {exc}; is `mien serve` running, and are the character and token right?"
             ) from None
@@ -146,9 +144,8 @@ class AsyncWebSocketClient:
     async def connect(
         cls, url: str, character: str | None = None, token: str | None = None, open_timeout_s: float = 5.0
     ) -> AsyncWebSocketClient:
-        """Open a connection."""
-        from websockets.asyncio.client import connect
-
+        """Open a connection (raises :class:`~mien.errors.MissingExtraError` without the serve extra)."""
+        connect = require("websockets.asyncio.client", "serve").connect
         return cls(await connect(_ws_url(url, character, token), open_timeout=open_timeout_s, max_size=2**20))
 
     async def recv_frame(self) -> Frame:

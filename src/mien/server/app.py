@@ -17,15 +17,14 @@ import socket
 import threading
 import time
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from mien.errors import InvalidValueError
+from mien.extras import require
 from mien.server.registry import CharacterSpec, Registry
 from mien.server.scheduler import Clock
+from mien.server.udp import OpenFacsEndpoint, open_udp
 from mien.server.websocket import Hub
-
-if TYPE_CHECKING:
-    from mien.server.udp import OpenFacsEndpoint
 
 __all__ = ["LiveServer", "ServeConfig", "ServerThread", "is_loopback", "serve"]
 
@@ -76,7 +75,8 @@ class ServeConfig:
 
 
 class LiveServer:
-    """The running parts: registry, clock, WebSocket hub, UDP transport, uvicorn server."""
+    """The running parts: registry, clock, WebSocket hub, UDP transport, uvicorn server (a
+    :class:`~mien.server.running.RunningServer`)."""
 
     def __init__(self, config: ServeConfig) -> None:
         self.config = config
@@ -103,14 +103,14 @@ class LiveServer:
         self._uvicorn: Any = None
 
     async def start(self) -> None:
-        """Create the characters, bind the sockets and start the clock and uvicorn."""
-        import uvicorn
-
-        from mien.server.http_api import create_app
-        from mien.server.udp import open_udp
+        """Create the characters, warm up, bind the sockets and start the clock and uvicorn."""
+        uvicorn = require("uvicorn", "serve")
+        require("fastapi", "serve")
+        from mien.server.http_api import create_app  # FastAPI and pydantic load only when a server starts
 
         for spec in self.config.characters:
             self.registry.add(spec)
+        self.registry.warm_up()  # the first laugh is slow: not on the clock
         host = self.config.host
         self._udp, self.udp_port = await open_udp(self.registry, host, self.config.udp_port)
         sock = socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET, socket.SOCK_STREAM)

@@ -6,20 +6,24 @@ Every command goes through the same parser as UDP and WebSocket messages
 
 from __future__ import annotations
 
+import asyncio
+import io
 import secrets
 import time
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
+import orjson
 from fastapi import Depends, FastAPI, HTTPException, Query, Request, Response, WebSocket, status
 from fastapi.responses import JSONResponse
 from pydantic import BaseModel, Field
 
-from mien.errors import MienError, UnknownNameError
+from mien.errors import InvalidValueError, MienError, UnknownNameError
+from mien.exchange import reader_for
+from mien.exchange.glb import head_glb_bytes
 from mien.server.protocol import MessageRejected, frame_bytes, idle_parts, parse_message
 from mien.server.registry import CharacterSpec, Entry
-
-if TYPE_CHECKING:
-    from mien.server.app import LiveServer
+from mien.server.running import RunningServer
+from mien.viewer import routes
 
 __all__ = ["create_app"]
 
@@ -168,10 +172,12 @@ def _info(entry: Entry) -> CharacterInfo:
     )
 
 
-def create_app(server: LiveServer) -> FastAPI:
-    """The FastAPI app of ``server``; mounts the browser viewer (``mien.viewer.routes.mount``) when present."""
-    import orjson
+def create_app(server: RunningServer) -> FastAPI:
+    """The FastAPI app of ``server``, with the browser viewer (:func:`mien.viewer.routes.mount`).
 
+    The handlers that read or change the characters are ``async``: they run on the event loop, between ticks,
+    never in a worker thread beside the clock. Loading a new character's head runs in a thread.
+    """
     app = FastAPI(
         docs_url=None,  # Swagger UI and ReDoc load their scripts from a CDN; mien never downloads at run time
         redoc_url=None,
@@ -213,7 +219,7 @@ def create_app(server: LiveServer) -> FastAPI:
     api = [Depends(check_token)]
 
     @app.get("/api/health", response_model=Health, dependencies=api, responses=_ERRORS)
-    def health() -> Health:
+    async def health() -> Health:
         """Uptime, clock, message and viewer counters, rejections per reason."""
         c, s = registry.counters, server.clock.stats
         return Health(
@@ -238,17 +244,19 @@ def create_app(server: LiveServer) -> FastAPI:
         )
 
     @app.get("/api/characters", response_model=list[CharacterInfo], dependencies=api, responses=_ERRORS)
-    def list_characters() -> list[CharacterInfo]:
+    async def list_characters() -> list[CharacterInfo]:
         """Every character, in creation order (the first is the default target)."""
         return [_info(entry) for entry in registry.entries.values()]
 
     @app.post("/api/characters", response_model=CharacterInfo, status_code=201, dependencies=api, responses=_ERRORS)
-    def create_character(body: CharacterCreate) -> CharacterInfo:
+    async def create_character(body: CharacterCreate) -> CharacterInfo:
         """Create a character with its own head, identity, seed, idle and emotion settings."""
-        return _info(registry.add(CharacterSpec(**body.model_dump())))
+        spec = CharacterSpec(**body.model_dump())
+        await asyncio.to_thread(registry.prepare, spec)  # the slow head load stays off the clock
+        return _info(registry.add(spec))
 
     @app.get("/api/characters/{character_id}", response_model=CharacterState, dependencies=api, responses=_ERRORS)
-    def character_state(character_id: str) -> CharacterState:
+    async def character_state(character_id: str) -> CharacterState:
         """The character's face at the last tick: AUs, pose and morph weights."""
         entry = entry_of(character_id)
         state = registry.state(entry)
@@ -264,14 +272,14 @@ def create_app(server: LiveServer) -> FastAPI:
         )
 
     @app.delete("/api/characters/{character_id}", status_code=204, dependencies=api, responses=_ERRORS)
-    def delete_character(character_id: str) -> Response:
+    async def delete_character(character_id: str) -> Response:
         """Remove a character (its viewers get no more frames)."""
         registry.remove(character_id)
         return Response(status_code=204)
 
     @app.post("/api/characters/{character_id}/aus", response_model=Accepted, status_code=202, dependencies=api,
               responses=_ERRORS)  # fmt: skip
-    def send_aus(character_id: str, body: AusCommand) -> Accepted:
+    async def send_aus(character_id: str, body: AusCommand) -> Accepted:
         """Set the full AU state (AUs not named go to 0) with an optional OpenFACS Speed."""
         command: dict[str, Any] = dict(body.aus)
         if body.speed is not None:
@@ -286,25 +294,25 @@ def create_app(server: LiveServer) -> FastAPI:
 
     @app.post("/api/characters/{character_id}/emotion", response_model=Accepted, status_code=202,
               dependencies=api, responses=_ERRORS)  # fmt: skip
-    def send_emotion(character_id: str, body: EmotionCommand) -> Accepted:
+    async def send_emotion(character_id: str, body: EmotionCommand) -> Accepted:
         """Trigger an emotion or blend event now."""
         return queue(character_id, {"emotion": body.emotion, "intensity": body.intensity})
 
     @app.post("/api/characters/{character_id}/pad", response_model=Accepted, status_code=202, dependencies=api,
               responses=_ERRORS)  # fmt: skip
-    def send_pad(character_id: str, body: PadCommand) -> Accepted:
+    async def send_pad(character_id: str, body: PadCommand) -> Accepted:
         """Move the PAD state (each -1..1)."""
         return queue(character_id, {"pad": [body.pleasure, body.arousal, body.dominance]})
 
     @app.post("/api/characters/{character_id}/laughter", response_model=Accepted, status_code=202,
               dependencies=api, responses=_ERRORS)  # fmt: skip
-    def send_laughter(character_id: str, body: LaughterCommand) -> Accepted:
+    async def send_laughter(character_id: str, body: LaughterCommand) -> Accepted:
         """Play a laugh or smile now."""
         return queue(character_id, {"laugh": body.type, "intensity": body.intensity})
 
     @app.post("/api/characters/{character_id}/idle", response_model=Accepted, status_code=202, dependencies=api,
               responses=_ERRORS)  # fmt: skip
-    def send_idle(character_id: str, body: IdleCommand) -> Accepted:
+    async def send_idle(character_id: str, body: IdleCommand) -> Accepted:
         """Switch idle behaviour (blinks, mouth and eyelid micro-motion, neck, gaze, wobble) on or off."""
         switches: dict[str, bool] = dict.fromkeys(idle_parts(), body.on) if body.on is not None else {}
         switches.update({part: on for part in idle_parts() if (on := getattr(body, part)) is not None})
@@ -329,15 +337,10 @@ def create_app(server: LiveServer) -> FastAPI:
         return Accepted(character=entry.spec.id)
 
     @app.get("/api/characters/{character_id}/head.glb", dependencies=api,
-             responses={**_ERRORS, 200: {"content": {"model/gltf-binary": {}}}, 501: {"model": ErrorBody}})  # fmt: skip
+             responses={**_ERRORS, 200: {"content": {"model/gltf-binary": {}}}})  # fmt: skip
     def head_glb(character_id: str) -> Response:
         """The character's head as glTF binary (mesh and morph targets in frame weight order)."""
-        entry = entry_of(character_id)
-        try:
-            from mien.exchange.glb import head_glb_bytes  # type: ignore[import-not-found,unused-ignore]
-        except ImportError:
-            return JSONResponse({"detail": "glb export is not available yet (mien.exchange.glb)"}, status_code=501)
-        return Response(head_glb_bytes(entry.rig), media_type="model/gltf-binary")
+        return Response(head_glb_bytes(entry_of(character_id).rig), media_type="model/gltf-binary")
 
     @app.websocket("/ws")
     async def stream(websocket: WebSocket, character: str | None = None, token: str | None = None) -> None:
@@ -351,22 +354,12 @@ def create_app(server: LiveServer) -> FastAPI:
         await websocket.accept()
         await server.hub.serve(websocket, character)
 
-    try:
-        from mien.viewer import routes  # type: ignore[attr-defined,unused-ignore]
-    except ImportError:
-        pass
-    else:
-        routes.mount(app)
+    routes.mount(app)
     return app
 
 
 def _read_clip(data: bytes, suffix: str) -> Any:
     """The uploaded clip file's bytes read in memory by the reader of ``suffix`` (readers take a binary stream)."""
-    import io
-
-    from mien.errors import InvalidValueError
-    from mien.exchange import reader_for
-
     if not suffix.startswith(".") or "/" in suffix or len(suffix) > 16:
         raise InvalidValueError("suffix", suffix, "a file suffix such as .json or .npz")
     try:

@@ -47,20 +47,27 @@ import enum
 import math
 import re
 import struct
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
 
+from mien.affect.emotions import resolve_emotion
 from mien.errors import MienError
-from mien.facs.catalogue import ACTION_UNITS, FACE_AU_CODES, OPENFACS_AUS
+from mien.extras import require
+from mien.facs.catalogue import ACTION_UNITS, FACE_AU_CODES, FACE_CHANNELS, OPENFACS_AUS, POSE_CHANNELS, au_channels
+from mien.facs.idle import IdleSettings
+from mien.laughter.names import LAUGH_TYPES
 
 __all__ = [
+    "AU_CHANNELS",
     "AU_KEYS",
     "FRAME_HEADER_BYTES",
     "FRAME_MAGIC",
     "FRAME_VERSION",
     "MAX_MESSAGE_BYTES",
+    "N_AU_CHANNELS",
     "OPENFACS_KEYS",
     "Frame",
     "Message",
@@ -93,6 +100,18 @@ def _au_keys() -> frozenset[str]:
 AU_KEYS: frozenset[str] = _au_keys()
 """Every AU key a message may hold: ``AU<code>`` for each face AU, plus ``AU<code>L``/``R`` for lateral ones."""
 
+N_AU_CHANNELS = len(FACE_CHANNELS) - len(POSE_CHANNELS)
+"""AU channels at the start of a face frame (a state message sets all of them)."""
+
+AU_CHANNELS: dict[str, tuple[int, ...]] = {
+    key: au_channels(int(key[2:].rstrip("LR")), key[-1] if key[-1] in "LR" else None) for key in sorted(AU_KEYS)
+}
+"""AU key -> the face-frame channels it sets, resolved once (``"AU12"``: both sides; ``"AU12L"``: the left).
+
+>>> [FACE_CHANNELS[i] for i in AU_CHANNELS["AU12"]], [FACE_CHANNELS[i] for i in AU_CHANNELS["AU12L"]]
+(['AU12L', 'AU12R'], ['AU12L'])
+"""
+
 _EXTENSION_KEYS = frozenset(
     {"Speed", "speeds", "tau_s", "play", "emotion", "intensity", "pad", "laugh", "idle", "character", "watch"}
 )
@@ -113,6 +132,7 @@ class Rejection(enum.StrEnum):
     OUT_OF_RANGE = "out_of_range"
     UNKNOWN_NAME = "unknown_name"
     UNKNOWN_CHARACTER = "unknown_character"
+    MISSING_EXTRA = "missing_extra"
     ENGINE_ERROR = "engine_error"
     INTERNAL_ERROR = "internal_error"
 
@@ -223,8 +243,6 @@ def _name(key: str, value: Any) -> str:
 
 def _check_names(emotion: str | None, laugh: str | None) -> None:
     if emotion is not None:
-        from mien.affect.emotions import resolve_emotion
-
         try:
             resolve_emotion(emotion)
         except MienError:
@@ -232,8 +250,6 @@ def _check_names(emotion: str | None, laugh: str | None) -> None:
                 Rejection.UNKNOWN_NAME, f"emotion={emotion!r} is not a known emotion or blend"
             ) from None
     if laugh is not None:
-        from mien.laughter.names import LAUGH_TYPES
-
         if laugh not in LAUGH_TYPES:
             raise MessageRejected(Rejection.UNKNOWN_NAME, f"laugh={laugh!r}: expected one of {', '.join(LAUGH_TYPES)}")
 
@@ -256,13 +272,12 @@ def _play(value: Any) -> PlayRequest:
     )
 
 
+_IDLE_PARTS = tuple(f.name for f in fields(IdleSettings) if f.type in (bool, "bool"))
+
+
 def idle_parts() -> tuple[str, ...]:
     """The on/off switches of :class:`mien.facs.idle.IdleSettings` (``blink``, ``mouth``, ...)."""
-    from dataclasses import fields
-
-    from mien.facs.idle import IdleSettings
-
-    return tuple(f.name for f in fields(IdleSettings) if f.type in (bool, "bool"))
+    return _IDLE_PARTS
 
 
 def _idle(value: Any) -> tuple[tuple[str, bool], ...]:
@@ -288,12 +303,12 @@ def _character(key: str, value: Any) -> str:
     return name
 
 
-_JSON: tuple[Any, type[Exception]] | None = None
+_JSON: tuple[Callable[[bytes], Any], type[Exception]] | None = None
 
 
-def _json() -> tuple[Any, type[Exception]]:
+def _json() -> tuple[Callable[[bytes], Any], type[Exception]]:
     global _JSON
-    import orjson  # the serve extra; imported on first use so the client needs only the standard library
+    orjson = require("orjson", "serve")  # imported on first use, so the client needs no extra
 
     _JSON = (orjson.loads, orjson.JSONDecodeError)
     return _JSON
@@ -313,9 +328,7 @@ def parse_message(data: bytes | str, max_bytes: int = MAX_MESSAGE_BYTES) -> Mess
     mien.server.protocol.MessageRejected: wrong_type: AU4='x' is not a number
     """
     if isinstance(data, str):  # a WebSocket text message; the fast path below looks at the raw bytes
-        data = data.encode("utf-8")
-    if isinstance(data, str):
-        data = data.encode("utf-8", "surrogatepass")
+        data = data.encode("utf-8", "surrogatepass")  # a lone surrogate becomes malformed JSON, not a crash
     if len(data) > max_bytes:
         raise MessageRejected(Rejection.OVERSIZED, f"{len(data)} bytes > {max_bytes}")
     loads, decode_error = _JSON or _json()

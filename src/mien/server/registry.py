@@ -1,23 +1,41 @@
 """The characters of a server: id -> batch row, head, identity, rig driver; queued commands per character.
 
 Transports call :meth:`Registry.submit` (cheap: store the newest state message, queue events); the clock
-calls :meth:`Registry.step`, which applies what is queued and steps ONE batch for every character.
+calls :meth:`Registry.step`, which applies what is queued and steps ONE batch for every character. The state
+messages of a tick are written in one go (names resolved once in :data:`~mien.server.protocol.AU_CHANNELS`,
+one vectorised write of every row's targets); a bad or unservable message costs that message (a counted
+rejection), never the tick. :meth:`Registry.warm_up` does before the clock starts what is slow the first time.
 """
 
 from __future__ import annotations
 
+import logging
+import math
 import re
 from collections import deque
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from functools import partial
 from typing import Any
 
 import numpy as np
 
-from mien.errors import InvalidValueError, MienError, UnknownNameError
-from mien.server.protocol import Message, MessageRejected, Rejection
+from mien.character import EXPRESSION_BASES, CharacterBatch
+from mien.errors import InvalidValueError, MienError, MissingExtraError, UnknownNameError
+from mien.extras import EXTRA_OF
+from mien.facs.catalogue import FACE_CHANNELS
+from mien.facs.clip import Clip
+from mien.facs.dynamics import time_constant_from_speed
+from mien.facs.idle import IdleSettings
+from mien.laughter.names import LAUGH_TYPES
+from mien.rig.driver import RigDriver
+from mien.rig.heads import load_head
+from mien.server.protocol import AU_CHANNELS, N_AU_CHANNELS, Message, MessageRejected, Rejection, idle_parts
 from mien.server.stats import Counters, RateLimitedLog
 
 __all__ = ["MAX_EVENTS_PER_CHARACTER", "CharacterSpec", "Entry", "Registry"]
+
+log = logging.getLogger("mien.server")
 
 MAX_EVENTS_PER_CHARACTER = 256
 """Queued events (emotion, laugh, PAD, play) per character between two ticks; older ones are dropped."""
@@ -65,7 +83,7 @@ class Entry:
     """Events not yet applied, oldest first."""
     idle: Any = None
     """Current :class:`mien.facs.idle.IdleSettings` (None: idle off)."""
-    clips: list[Any] = field(default_factory=list)
+    clips: list[Clip] = field(default_factory=list)
     """:class:`~mien.facs.clip.Clip` objects to start playing at the next tick."""
 
 
@@ -73,8 +91,6 @@ class Registry:
     """Characters stepped together; see the module docstring."""
 
     def __init__(self, counters: Counters | None = None) -> None:
-        from mien.character import CharacterBatch
-
         self.batch = CharacterBatch(0)
         """The one :class:`~mien.character.CharacterBatch` of every character."""
         self.counters = counters or Counters()
@@ -85,6 +101,9 @@ class Registry:
         """(n_rows, 62) face frames of the last step."""
         self.time_s = 0.0
         """Time of the last step, seconds."""
+        self.missing: dict[str, str] = {}
+        """Message fields this install cannot serve (``"laugh"``) -> why (the missing extra): such messages are
+        rejected as ``missing_extra`` on arrival."""
         self._rigs: dict[tuple[str, str | None, bool], tuple[Any, Any]] = {}
         self._log = RateLimitedLog()
 
@@ -95,28 +114,31 @@ class Registry:
         """The first character's id (the target of messages without ``character``)."""
         return next(iter(self.entries), None)
 
-    def add(self, spec: CharacterSpec) -> Entry:
-        """Create a character (raises :class:`InvalidValueError` if the id is taken, UnknownNameError for a
-        bad head or identity)."""
-        from mien.character import EXPRESSION_BASES
-
-        if spec.id in self.entries:
-            raise InvalidValueError("id", spec.id, "an id not in use (DELETE it first)")
+    def prepare(self, spec: CharacterSpec) -> tuple[Any, Any]:
+        """Load (once) and return the ``(rig, driver)`` of ``spec``'s head: the slow part of :meth:`add`, which
+        touches no character, so it can run off the event loop (raises UnknownNameError for a bad head,
+        identity or expression basis)."""
         if spec.expression_basis not in EXPRESSION_BASES:
             raise UnknownNameError("expression basis", spec.expression_basis, EXPRESSION_BASES)
         key = (spec.head, spec.identity, spec.expression_basis == "feature_points")
         if key not in self._rigs:
-            from mien.rig.driver import RigDriver
-            from mien.rig.heads import load_head
-
             rig = load_head(spec.head, spec.identity, feature_points=key[2])
             self._rigs[key] = (rig, RigDriver(rig))
-        rig, driver = self._rigs[key]
-        row = int(self.batch.add_character(seed=spec.seed, idle=spec.idle, expression_basis=spec.expression_basis))
+        return self._rigs[key]
+
+    def add(self, spec: CharacterSpec) -> Entry:
+        """Create a character (raises :class:`InvalidValueError` if the id is taken, UnknownNameError for a
+        bad head or identity)."""
+        if spec.id in self.entries:
+            raise InvalidValueError("id", spec.id, "an id not in use (DELETE it first)")
+        rig, driver = self.prepare(spec)
+        row = int(  # "pad" mode: a live character takes PAD moves, and emotion events still add on top
+            self.batch.add_character(
+                seed=spec.seed, idle=spec.idle, expression_basis=spec.expression_basis, emotion_mode="pad"
+            )
+        )
         entry = Entry(spec, row, rig, driver)
         if spec.idle:
-            from mien.facs.idle import IdleSettings
-
             entry.idle = IdleSettings()
         self.entries[spec.id] = entry
         return entry
@@ -136,15 +158,31 @@ class Registry:
 
     # ------------------------------------------------------------------ commands
 
+    def warm_up(self) -> None:
+        """Do what is slow the first time before the clock starts, so no tick stalls on it: generate and play
+        one laugh on a scratch batch (imports the laughter extra and fills its caches: about 0.3-0.5 s cold,
+        1-5 ms after). Without the laughter extra, laugh messages are rejected on arrival from now on
+        (:attr:`missing`). The characters' heads are loaded by :meth:`add`."""
+        scratch = CharacterBatch(1, idle=False)
+        try:
+            scratch.laugh(0, LAUGH_TYPES[1])
+            scratch.step(0.5)
+        except ImportError as exc:  # MissingExtraError, or a raw ImportError of a module not yet behind require
+            self.missing["laugh"] = _missing_extra(exc)
+            log.warning("laugh messages will be rejected: %s", self.missing["laugh"])
+
     def submit(self, message: Message, default: str | None = None) -> Entry:
         """Queue ``message`` for its character (``message.character``, else ``default``, else the first).
 
-        Raises :class:`MessageRejected` (``unknown_character``) when there is no such character.
+        Raises :class:`MessageRejected`: ``unknown_character`` when there is no such character,
+        ``missing_extra`` for a laugh when this install lacks the laughter extra (see :attr:`missing`).
         """
         character_id = message.character or default or self.default_id
         entry = self.entries.get(character_id) if character_id is not None else None
         if entry is None:
             raise MessageRejected(Rejection.UNKNOWN_CHARACTER, f"character={character_id!r} does not exist")
+        if message.laugh is not None and "laugh" in self.missing:
+            raise MessageRejected(Rejection.MISSING_EXTRA, f"laugh={message.laugh!r}: {self.missing['laugh']}")
         if message.aus is not None:
             if entry.state is not None:
                 self.counters.coalesced += 1
@@ -158,22 +196,52 @@ class Registry:
         self.counters.rejections[error.reason.value] += 1
         self._log.warn(error.reason.value, error.detail)
 
-    def _apply_state(self, row: int, message: Message) -> None:
-        aus = dict(message.aus or ())
-        self.batch.set_aus(row, aus, replace=True)
-        if message.speed is not None:
-            self.batch.set_speed(row, message.speed)
-        for au, speed in message.speeds:
-            self.batch.set_speed(row, speed, au=au)
-        for au, tau_s in message.tau_s:
-            self.batch.set_au(row, au, aus.get(au, 0.0), tau_s=tau_s)
+    def _apply_states(self, states: list[tuple[Entry, Message]]) -> None:
+        """Write the full AU states of a tick in one go: each message's targets (AUs not named: 0) and Speed
+        (as a time constant), then the rare per-AU ``speeds``/``tau_s`` extensions."""
+        tick_hz = self.batch.facs.tick_hz
+        written: list[tuple[Entry, Message]] = []
+        targets: list[list[float]] = []
+        taus: list[float] = []
+        for entry, message in states:
+            values = [0.0] * N_AU_CHANNELS
+            try:
+                for key, value in message.aus or ():
+                    for channel in AU_CHANNELS[key]:
+                        values[channel] = value
+                tau = math.nan if message.speed is None else time_constant_from_speed(message.speed, tick_hz)
+            except KeyError as exc:  # parse_message lets no unknown key through; a hand-made Message might
+                self.reject(MessageRejected(Rejection.UNKNOWN_AU, f"{entry.spec.id}: {exc.args[0]!r}"[:200]))
+                continue
+            except MienError as exc:
+                self.reject(MessageRejected(Rejection.ENGINE_ERROR, f"{entry.spec.id}: {exc}"))
+                continue
+            written.append((entry, message))
+            targets.append(values)
+            taus.append(tau)
+        facs = self.batch.facs
+        rows = np.array([entry.row for entry, _ in written], dtype=np.intp)
+        try:
+            facs.set_targets(rows, np.array(targets, dtype=np.float64), np.array(taus))
+        except (MienError, TypeError, ValueError):  # a bad value in a hand-made Message: keep the good ones
+            for i, (entry, _) in enumerate(written):
+                try:
+                    one = slice(i, i + 1)
+                    facs.set_targets(rows[one], np.array(targets[one], np.float64), np.array(taus[one]))
+                except (MienError, TypeError, ValueError) as exc:
+                    self.reject(MessageRejected(Rejection.ENGINE_ERROR, f"{entry.spec.id}: {exc}"))
+        for entry, message in written:
+            if message.speeds or message.tau_s:
+                try:
+                    aus = dict(message.aus or ())
+                    for au, speed in message.speeds:
+                        self.batch.set_speed(entry.row, speed, au=au)
+                    for au, tau_s in message.tau_s:
+                        self.batch.set_au(entry.row, au, aus.get(au, 0.0), tau_s=tau_s)
+                except MienError as exc:
+                    self.reject(MessageRejected(Rejection.ENGINE_ERROR, f"{entry.spec.id}: {exc}"))
 
     def _apply_idle(self, entry: Entry, switches: tuple[tuple[str, bool], ...], t_s: float) -> None:
-        from dataclasses import replace
-
-        from mien.facs.idle import IdleSettings
-        from mien.server.protocol import idle_parts
-
         off: dict[str, Any] = dict.fromkeys(idle_parts(), False)
         current = entry.idle or replace(IdleSettings(), **off)
         changes: dict[str, Any] = dict(switches)
@@ -192,27 +260,48 @@ class Registry:
                 row, p.au, p.intensity, onset_s=p.onset_s, apex_s=p.apex_s, offset_s=p.offset_s, start_s=t_s
             )
         if message.emotion is not None:
-            self.batch.emote(row, message.emotion, message.intensity, t_s)
+            self.batch.emote(row, message.emotion, message.intensity, start_s=t_s)
         if message.pad is not None:
-            self.batch.set_pad(row, *message.pad, t_s)
+            self.batch.set_pad(row, *message.pad, start_s=t_s)
         if message.laugh is not None:
             self.batch.laugh(row, message.laugh, message.intensity, start_s=t_s, seed=seed)
 
     def apply_pending(self, t_s: float) -> None:
-        """Apply every queued command at ``t_s`` (engine errors are counted as ``engine_error``, never raised)."""
+        """Apply every queued command at ``t_s``. Never raises: a message that fails costs that message only,
+        counted as ``missing_extra`` (an optional dependency is not installed), ``engine_error`` (the engine
+        refused a value) or ``internal_error`` (a bug, logged)."""
+        states: list[tuple[Entry, Message]] = []
+        busy: list[Entry] = []
         for entry in self.entries.values():
-            if entry.state is None and not entry.events and not entry.clips:
-                continue
-            try:
-                if entry.state is not None:
-                    message, entry.state = entry.state, None
-                    self._apply_state(entry.row, message)
-                while entry.events:
-                    self._apply_event(entry, entry.events.popleft(), t_s)
-                while entry.clips:
-                    self.batch.play_clip(entry.row, entry.clips.pop(0), start_s=t_s)
-            except MienError as exc:
-                self.reject(MessageRejected(Rejection.ENGINE_ERROR, f"{entry.spec.id}: {exc}"))
+            if entry.state is not None:
+                states.append((entry, entry.state))
+                entry.state = None
+            if entry.events or entry.clips:
+                busy.append(entry)
+        if states:
+            self._apply_states(states)  # events touch no held target, so the states can all go first
+        for entry in busy:
+            while entry.events:
+                message = entry.events.popleft()
+                self._guarded(entry, message.laugh is not None, partial(self._apply_event, entry, message, t_s))
+            while entry.clips:
+                clip = entry.clips.pop(0)
+                self._guarded(entry, False, partial(self.batch.play_clip, entry.row, clip, start_s=t_s))
+
+    def _guarded(self, entry: Entry, laugh: bool, apply: Callable[[], object]) -> None:
+        """``apply()``, turning any failure into a counted rejection of this one message."""
+        try:
+            apply()
+        except ImportError as exc:  # MissingExtraError, or a raw one from a module not yet behind require
+            detail = _missing_extra(exc)
+            if laugh:
+                self.missing["laugh"] = detail  # reject the next ones on arrival
+            self.reject(MessageRejected(Rejection.MISSING_EXTRA, f"{entry.spec.id}: {detail}"))
+        except MienError as exc:
+            self.reject(MessageRejected(Rejection.ENGINE_ERROR, f"{entry.spec.id}: {exc}"))
+        except Exception as exc:  # a bug must cost one message, not the tick of every character
+            log.exception("applying a message to %s failed", entry.spec.id)
+            self.reject(MessageRejected(Rejection.INTERNAL_ERROR, f"{entry.spec.id}: {type(exc).__name__}: {exc}"))
 
     def step(self, t_s: float) -> np.ndarray:
         """Apply queued commands and step every character to ``t_s``; returns the (n_rows, 62) frames."""
@@ -231,8 +320,14 @@ class Registry:
 
     def state(self, entry: Entry) -> dict[str, Any]:
         """The character's face frame at the last step as ``{channel: value}`` (AUs 0..5, pose degrees)."""
-        from mien.facs.catalogue import FACE_CHANNELS
-
         if entry.row >= self.frames.shape[0]:
             return dict.fromkeys(FACE_CHANNELS, 0.0)
         return dict(zip(FACE_CHANNELS, self.frames[entry.row].tolist(), strict=True))
+
+
+def _missing_extra(error: ImportError) -> str:
+    """The message of the :class:`MissingExtraError` behind ``error`` (a raw ImportError gets one made)."""
+    if isinstance(error, MissingExtraError):
+        return str(error)
+    module = (error.name or "an optional module").split(".", 1)[0]
+    return str(MissingExtraError(module, EXTRA_OF.get(module, "all")))
