@@ -14,7 +14,7 @@ import io
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from enum import Enum
+from enum import StrEnum
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -36,7 +36,7 @@ __all__ = [
 ]
 
 
-class AlphaMode(str, Enum):
+class AlphaMode(StrEnum):
     """How a material's alpha is used (glTF 2.0 ``material.alphaMode``)."""
 
     OPAQUE = "OPAQUE"
@@ -192,7 +192,7 @@ def _material(scene: GltfScene, index: int | None, decoded: dict[int, np.ndarray
         texture = None if image is None else decoded[image]
     mode = AlphaMode(source.alphaMode or "OPAQUE")
     cutoff = 0.5 if source.alphaCutoff is None else float(source.alphaCutoff)
-    return Material(name, texture, factor, mode, cutoff, bool(source.doubleSided))  # type: ignore[arg-type]
+    return Material(name, texture, factor, mode, cutoff, bool(source.doubleSided))
 
 
 def textured_mesh_from_gltf(
