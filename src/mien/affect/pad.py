@@ -18,14 +18,13 @@ disgust lie close in PAD space (22 degrees apart), so a state at either also car
 
 from __future__ import annotations
 
-import csv
 import math
-from importlib import resources
 
 import numpy as np
 
 from mien.affect.emotions import EMOTIONS
 from mien.errors import InvalidValueError
+from mien.fileio.tables import read_table
 
 __all__ = [
     "PAD_FACTORS",
@@ -45,8 +44,7 @@ PAD_RADIUS: float = 0.75
 
 
 def _load() -> tuple[np.ndarray, tuple[str, ...]]:
-    text = resources.files("mien.affect").joinpath("data/pad_prototypes.csv").read_text(encoding="utf-8")
-    rows = {r["emotion"]: r for r in csv.DictReader(line for line in text.splitlines() if not line.startswith("#"))}
+    rows = {r["emotion"]: r for r in read_table("mien.affect", "data/pad_prototypes.csv")}
     table = np.array([[float(rows[e][f]) for f in PAD_FACTORS] for e in EMOTIONS])
     table.setflags(write=False)
     return table, tuple(rows[e]["source"] for e in EMOTIONS)

@@ -9,13 +9,12 @@ character's left. In mien's rig frame (+x to the character's left, +y up, +z for
 
 from __future__ import annotations
 
-import csv
 from functools import cache
-from importlib import resources
 
 import numpy as np
 
 from mien.affect.emotions import EMOTIONS
+from mien.fileio.tables import read_table
 
 __all__ = [
     "FEATURE_NAMES",
@@ -37,8 +36,7 @@ TABLE1_EMOTION_COLUMNS: dict[str, str] = {
 
 
 def _read() -> tuple[tuple[str, ...], np.ndarray]:
-    text = resources.files("mien.affect").joinpath("data/broekens_table1.csv").read_text(encoding="utf-8")
-    rows = list(csv.DictReader(line for line in text.splitlines() if not line.startswith("#")))
+    rows = read_table("mien.affect", "data/broekens_table1.csv")
     names = tuple(row["feature"] for row in rows)
     vectors = np.zeros((len(EMOTIONS), len(rows), 3))
     for f, row in enumerate(rows):

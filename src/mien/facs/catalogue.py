@@ -11,11 +11,10 @@ to the character's left, ``gaze_pitch_deg`` > 0 looks up.
 
 from __future__ import annotations
 
-import csv
 from dataclasses import dataclass
-from importlib import resources
 
 from mien.errors import UnknownNameError
+from mien.fileio.tables import read_table
 
 __all__ = [
     "ACTION_UNITS",
@@ -58,8 +57,7 @@ class ActionUnit:
 
 
 def _load() -> dict[int, ActionUnit]:
-    text = resources.files("mien.facs").joinpath("data/action_units.csv").read_text(encoding="utf-8")
-    rows = csv.DictReader(line for line in text.splitlines() if not line.startswith("#"))
+    rows = read_table("mien.facs", "data/action_units.csv")
     out: dict[int, ActionUnit] = {}
     for row in rows:
         code = int(row["code"])

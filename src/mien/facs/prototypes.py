@@ -2,32 +2,21 @@
 
 from __future__ import annotations
 
-import csv
-from importlib import resources
-
 import numpy as np
 
 from mien.errors import UnknownNameError
 from mien.facs.catalogue import FACE_CHANNELS, au_channels
 from mien.facs.intensity import check_intensity, parse_au
+from mien.fileio.tables import read_table, table_version
 
 __all__ = ["EMFACS_PROTOTYPES", "PROTOTYPES_VERSION", "prototype_vector"]
 
 
-def _text() -> str:
-    return resources.files("mien.facs").joinpath("data/emfacs_prototypes.csv").read_text(encoding="utf-8")
-
-
-def _version() -> str:
-    for line in _text().splitlines():
-        if line.startswith("#") and line[1:].strip().lower().startswith("version:"):
-            return line.split(":", 1)[1].strip()
-    return ""
+_TABLE = ("mien.facs", "data/emfacs_prototypes.csv")
 
 
 def _load() -> dict[str, dict[str, float]]:
-    text = _text()
-    rows = csv.DictReader(line for line in text.splitlines() if not line.startswith("#"))
+    rows = read_table(*_TABLE)
     table: dict[str, dict[str, float]] = {}
     for row in rows:
         entry: dict[str, float] = {}
@@ -44,7 +33,7 @@ def _load() -> dict[str, dict[str, float]]:
 EMFACS_PROTOTYPES: dict[str, dict[str, float]] = _load()
 """Emotion -> {``"AU6"``: 3.5, ...}: the prototype AUs and their intensities (0..5) at emotion intensity 1."""
 
-PROTOTYPES_VERSION: str = _version()
+PROTOTYPES_VERSION: str = table_version(*_TABLE)
 """The ``# version:`` of the shipped prototype table (``"2"``)."""
 
 

@@ -14,7 +14,7 @@ import csv
 from functools import cache
 from importlib import resources
 
-__all__ = ["read_table", "table_comments"]
+__all__ = ["read_table", "table_comments", "table_version"]
 
 
 @cache
@@ -38,3 +38,16 @@ def table_comments(package: str, name: str) -> list[str]:
     """The comment lines of the table ``name`` of ``package``, without the leading ``#`` and surrounding
     spaces (where a table records its source and version)."""
     return [line[1:].strip() for line in _text(package, name).splitlines() if line.startswith("#")]
+
+
+def table_version(package: str, name: str) -> str:
+    """The value of the table's ``# version: ...`` comment line (``""`` when it has none).
+
+    >>> table_version("mien.facs", "data/emfacs_prototypes.csv")
+    '2'
+    """
+    for comment in table_comments(package, name):
+        key, _, value = comment.partition(":")
+        if key.strip().lower() == "version":
+            return value.strip()
+    return ""

@@ -14,16 +14,15 @@ The result is a :class:`~mien.laughter.library.LaughLibrary` in exactly the form
 
 from __future__ import annotations
 
-import csv
 import functools
 from dataclasses import dataclass
-from importlib import resources
 
 import numpy as np
 
 from mien.facs.catalogue import FACE_CHANNELS, au_channels
 from mien.facs.clip import Clip
 from mien.facs.intensity import MAX_INTENSITY
+from mien.fileio.tables import read_table
 from mien.laughter.controllers import CONTROLLER_GAIN, DEFAULT_EPS
 from mien.laughter.library import LaughLibrary, LibraryMetadata
 from mien.laughter.names import CONTROLLER_NAMES, LAUGH_TYPES
@@ -167,8 +166,7 @@ def builtin_au_clip(type_name: str, fps: float = BUILTIN_FPS) -> Clip:
 
 @functools.cache
 def _gains() -> tuple[tuple[int, str, float], ...]:
-    text = resources.files("mien.laughter").joinpath("data/au_controllers.csv").read_text(encoding="utf-8")
-    rows = csv.DictReader(line for line in text.splitlines() if not line.startswith("#"))
+    rows = read_table("mien.laughter", "data/au_controllers.csv")
     return tuple((int(row["au"]), row["controller"], float(row["gain"])) for row in rows)
 
 

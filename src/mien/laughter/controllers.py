@@ -27,16 +27,15 @@ Some of the paper's landmark pairs barely move: the lower-lid segment (FP1, FP3)
 
 from __future__ import annotations
 
-import csv
 from dataclasses import dataclass
 from functools import cache
-from importlib import resources
 
 import numpy as np
 
 from mien.errors import InvalidValueError, UnknownNameError
 from mien.facs.arkit import ARKIT_INDEX, ARKIT_NAMES
 from mien.facs.clip import Clip
+from mien.fileio.tables import read_table
 from mien.laughter.facial_parameters import (
     FP_NAMES,
     Neutral,
@@ -124,8 +123,7 @@ class ArkitRow:
 @cache
 def arkit_mapping() -> tuple[int, tuple[ArkitRow, ...]]:
     """``(version, rows)`` of the controller -> ARKit mapping table."""
-    text = resources.files("mien.laughter").joinpath("data/controllers_to_arkit.csv").read_text("utf-8")
-    rows = list(csv.DictReader(line for line in text.splitlines() if not line.startswith("#")))
+    rows = read_table("mien.laughter", "data/controllers_to_arkit.csv")
     versions = {int(r["version"]) for r in rows}
     if len(versions) != 1:
         raise InvalidValueError("controllers_to_arkit.csv version", sorted(versions), "one mapping version")

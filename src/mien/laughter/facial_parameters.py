@@ -13,17 +13,16 @@ an array or read from a ``.npy`` / ``.json`` file (15 numbers).
 
 from __future__ import annotations
 
-import csv
 import json
 import os
 from dataclasses import dataclass
 from functools import cache
-from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
 from mien.errors import InvalidValueError
+from mien.fileio.tables import read_table
 
 __all__ = [
     "FP_NAMES",
@@ -68,8 +67,7 @@ class FacialParameter:
 @cache
 def facial_parameter_table() -> tuple[FacialParameter, ...]:
     """The 15 facial parameters, read from ``data/fp_landmarks.csv``."""
-    text = resources.files("mien.laughter").joinpath("data/fp_landmarks.csv").read_text("utf-8")
-    rows = csv.DictReader(line for line in text.splitlines() if not line.startswith("#"))
+    rows = read_table("mien.laughter", "data/fp_landmarks.csv")
     table = []
     for row in rows:
         controllers = tuple(

@@ -12,13 +12,12 @@ Duchenne marker AU6 (cheek raise); the false smile and false laughter do not.
 
 from __future__ import annotations
 
-import csv
 from dataclasses import dataclass
-from importlib import resources
 
 from mien.errors import InvalidValueError, UnknownNameError
 from mien.facs.catalogue import au_channels
 from mien.facs.intensity import check_intensity, parse_au
+from mien.fileio.tables import read_table
 from mien.laughter.names import LAUGH_TYPES
 
 __all__ = ["TAXONOMY", "LaughRecipe", "recipe"]
@@ -96,8 +95,7 @@ def _parse_aus(text: str, type_name: str) -> tuple[tuple[int, str | None, float]
 
 
 def _load() -> dict[str, LaughRecipe]:
-    text = resources.files("mien.laughter").joinpath("data/taxonomy.csv").read_text(encoding="utf-8")
-    rows = csv.DictReader(line for line in text.splitlines() if not line.startswith("#"))
+    rows = read_table("mien.laughter", "data/taxonomy.csv")
     out: dict[str, LaughRecipe] = {}
     for row in rows:
         name = row["type"]

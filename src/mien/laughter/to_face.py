@@ -11,15 +11,14 @@ envelope, as are the AUs no single controller follows (lip press, chin raise) an
 
 from __future__ import annotations
 
-import csv
 import functools
-from importlib import resources
 
 import numpy as np
 
 from mien.facs.catalogue import FACE_CHANNELS
 from mien.facs.clip import Clip
 from mien.facs.intensity import MAX_INTENSITY
+from mien.fileio.tables import read_table
 from mien.laughter.names import CONTROLLER_NAMES
 from mien.laughter.taxonomy import LaughRecipe
 
@@ -62,8 +61,7 @@ def expression_envelope(controllers: Clip, reference: Clip) -> np.ndarray:
 
 @functools.cache
 def _drivers() -> dict[str, tuple[str, str]]:
-    text = resources.files("mien.laughter").joinpath("data/face_drivers.csv").read_text(encoding="utf-8")
-    rows = csv.DictReader(line for line in text.splitlines() if not line.startswith("#"))
+    rows = read_table("mien.laughter", "data/face_drivers.csv")
     return {row["au"]: (row["right"], row["left"]) for row in rows}
 
 

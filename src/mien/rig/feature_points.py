@@ -55,16 +55,15 @@ viewer's right = the character's left, +y down) at intensity ``s`` becomes the t
 
 from __future__ import annotations
 
-import csv
 import itertools
 from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cache
-from importlib import resources
 
 import numpy as np
 
 from mien.errors import InvalidValueError, UnknownNameError
+from mien.fileio.tables import read_table
 from mien.rig.geodesic import EdgeGraph
 from mien.rig.harmonic import BiharmonicSystem
 from mien.rig.model import MorphTarget, Rig
@@ -164,8 +163,7 @@ def _rides(text: str) -> tuple[tuple[str, tuple[float, float, float]], ...]:
 
 
 def _data_rows(name: str) -> list[dict[str, str]]:
-    text = resources.files("mien.rig").joinpath(f"data/{name}").read_text(encoding="utf-8")
-    return list(csv.DictReader(line for line in text.splitlines() if not line.startswith("#")))
+    return read_table("mien.rig", f"data/{name}")
 
 
 @cache

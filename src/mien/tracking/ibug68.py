@@ -6,21 +6,19 @@ falls between two mesh vertices is their mean.
 
 from __future__ import annotations
 
-import csv
 from functools import cache
-from importlib import resources
 
 import numpy as np
 
 from mien.errors import InvalidValueError
+from mien.fileio.tables import read_table
 
 __all__ = ["IBUG68_NAMES", "ibug68", "ibug68_indices"]
 
 
 @cache
 def _table() -> tuple[np.ndarray, tuple[str, ...]]:
-    text = resources.files("mien.tracking").joinpath("data/mediapipe_to_ibug68.csv").read_text("utf-8")
-    rows = list(csv.DictReader(line for line in text.splitlines() if not line.startswith("#")))
+    rows = read_table("mien.tracking", "data/mediapipe_to_ibug68.csv")
     pairs = np.array([(int(r["mediapipe_a"]), int(r["mediapipe_b"] or r["mediapipe_a"])) for r in rows], dtype=np.intp)
     if [int(r["ibug68"]) for r in rows] != list(range(68)):
         raise InvalidValueError("mediapipe_to_ibug68.csv", "rows", "iBUG points 0..67 in order")
