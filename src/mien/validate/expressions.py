@@ -13,11 +13,9 @@ the quality the study's people reached (Table 4).
 
 from __future__ import annotations
 
-import csv
-from importlib import resources
-
 from mien.affect.emotions import RECOGNISED_FIVE, STUDY_EXPRESSIONS, blend_emotions
 from mien.errors import UnknownNameError
+from mien.fileio.tables import read_table
 
 __all__ = ["BASICS", "EXPRESSIONS", "HUMAN_QUALITY", "LABEL_OF", "blend_components", "expected_labels"]
 
@@ -64,8 +62,7 @@ def expected_labels(name: str) -> tuple[str, ...] | None:
 
 
 def _paper_quality() -> dict[str, float]:
-    text = resources.files("mien.affect").joinpath("data/broekens_table4.csv").read_text(encoding="utf-8")
-    rows = csv.DictReader(line for line in text.splitlines() if not line.startswith("#"))
+    rows = read_table("mien.affect", "data/broekens_table4.csv")
     return {row["expression"]: float(row["quality"]) for row in rows}
 
 
