@@ -53,7 +53,9 @@ def region_edges(rig: Rig, region: str | None = "skin") -> np.ndarray:
     edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
     edges = np.sort(edges, axis=1)
     edges = edges[edges[:, 0] != edges[:, 1]]
-    return np.unique(edges, axis=0)
+    # One int64 key per edge (low * n + high sorts as the pairs do): np.unique(axis=0) sorts pairs ~4x slower.
+    keys = np.unique(edges[:, 0] * rig.n_vertices + edges[:, 1])
+    return np.stack([keys // rig.n_vertices, keys % rig.n_vertices], axis=1)
 
 
 def _check_vertices(rig: Rig, vertices: np.ndarray) -> np.ndarray:
