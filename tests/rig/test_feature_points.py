@@ -343,25 +343,25 @@ def study_heads(ict_dir: Path | None) -> list[Rig]:
 
 
 @pytest.fixture(scope="module", params=["builtin", "ict"])
-def study_head(request: pytest.FixtureRequest) -> list[Rig]:
-    if request.param == "builtin":
-        return study_heads(None)
-    return study_heads(request.getfixturevalue("ict_dir"))[1:]
+def study_head(request: pytest.FixtureRequest) -> list[tuple[Rig, Rig, RigDriver]]:
+    """``(rig, full, driver)`` per head of the study (the built-in one, or ICT a and b): :func:`driven` on its
+    feature-point rig, built once for the module's tests."""
+    rigs = study_heads(None) if request.param == "builtin" else study_heads(request.getfixturevalue("ict_dir"))[1:]
+    return [(rig, *driven(rig, FeaturePointRig.build(rig))) for rig in rigs]
 
 
-def test_edge_strain_within_the_heads_own_shapes(study_head: list[Rig]) -> None:
+def test_edge_strain_within_the_heads_own_shapes(study_head: list[tuple[Rig, Rig, RigDriver]]) -> None:
     """At the study's top intensity (moves limited as the driver shows them) no expression stretches an edge more
     than twice the worst ARKit shape."""
     from mien.rig.mesh_quality import max_edge_strain, max_target_strain
 
-    for rig in study_head:
-        full, driver = driven(rig, FeaturePointRig.build(rig))
+    for rig, full, driver in study_head:
         _, bound = max_target_strain(rig)
         for name in EXPRESSIONS:
             assert max_edge_strain(rig, expression_vertices(full, driver, name, 2.4)) <= 2.0 * bound, (rig.name, name)
 
 
-def test_the_lips_part_only_where_table1_parts_them(study_head: list[Rig]) -> None:
+def test_the_lips_part_only_where_table1_parts_them(study_head: list[tuple[Rig, Rig, RigDriver]]) -> None:
     """Sadness lowers both lips 1 mm and the corners 7 mm a unit: the lips stay closed (each lip's field sagged at
     the meeting line and opened them 1.0-3.3 mm in the middle before it was held). Surprise's jaw and anger's raised
     upper lip still part them."""
@@ -373,20 +373,18 @@ def test_the_lips_part_only_where_table1_parts_them(study_head: list[Rig]) -> No
         gaps = [(vertices[lm[u], 1] - vertices[lm[d], 1]) - (rest[lm[u], 1] - rest[lm[d], 1]) for u, d in pairs]
         return 1000.0 * max(gaps)
 
-    for rig in study_head:
-        full, driver = driven(rig, FeaturePointRig.build(rig))
+    for rig, full, driver in study_head:
         for intensity in (1.2, 2.4):
             assert abs(opening_mm(rig, expression_vertices(full, driver, "sadness", intensity))) < 0.3, rig.name
         assert opening_mm(rig, expression_vertices(full, driver, "surprise", 1.2)) > 10.0, rig.name
         assert opening_mm(rig, expression_vertices(full, driver, "anger", 1.2)) > 2.0, rig.name
 
 
-def test_no_triangle_flips(study_head: list[Rig]) -> None:
+def test_no_triangle_flips(study_head: list[tuple[Rig, Rig, RigDriver]]) -> None:
     """No skin triangle turns over, the slivers the head's own jawOpen/mouthClose/eyeBlink fold excepted."""
     from mien.rig.mesh_quality import flipped_triangles, fragile_faces, region_faces
 
-    for rig in study_head:
-        full, driver = driven(rig, FeaturePointRig.build(rig))
+    for rig, full, driver in study_head:
         judged = np.setdiff1d(region_faces(rig), fragile_faces(rig))
         for name in EXPRESSIONS:
             flips = flipped_triangles(rig, expression_vertices(full, driver, name, 2.4), faces=judged)
@@ -424,7 +422,7 @@ def test_the_lower_lip_is_pulled_back_short_of_the_teeth(head: tuple[Rig, Featur
     assert -rooms[0, back] < moved[1] < moved[0] < 0.0 and disgust[1, back] < -rooms[0, back]
 
 
-def test_the_nose_keeps_its_shape_as_the_nostrils_rise(study_head: list[Rig]) -> None:
+def test_the_nose_keeps_its_shape_as_the_nostrils_rise(study_head: list[tuple[Rig, Rig, RigDriver]]) -> None:
     """Table 1's disgust lifts the nostrils 8 mm per unit of intensity, 19.2 mm at 2.4: the built-in head's whole nose
     tip went up 14.5 mm with them and its underside turned into a flat shelf. The rise is limited to a fifth of the
     way to the nose's root (iBUG 27): the tip rises less than 7 mm at 2.4, and the nostril wings still rise at least
@@ -432,10 +430,9 @@ def test_the_nose_keeps_its_shape_as_the_nostrils_rise(study_head: list[Rig]) ->
     from mien.rig.feature_points import feature_rooms
 
     up = feature_target_names().index("fp_Nostrils_y")
-    for rig in study_head:
+    for rig, full, driver in study_head:
         gap = rig.neutral[rig.landmarks[27], 1] - rig.neutral[rig.landmarks[[31, 35]], 1].mean()
         assert feature_rooms(rig)[1, up] == pytest.approx(0.2 * gap, rel=1e-5)
-        full, driver = driven(rig, FeaturePointRig.build(rig))
         rise = {
             s: (expression_vertices(full, driver, "disgust", s)[: rig.n_vertices] - rig.neutral)[rig.landmarks, 1]
             for s in (1.2, 2.4)
