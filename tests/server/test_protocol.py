@@ -148,3 +148,22 @@ def test_frame_layout_is_fixed() -> None:
     assert np.abs(frame.weights - weights).max() < 1e-3  # float16
     with pytest.raises(Exception, match="frame"):
         decode_frame(data[:-1])
+
+
+def test_openfacs_message_with_a_character_id_is_a_state_message() -> None:
+    message = parse_message(openfacs_message({"AU12": 3, "AU6L": 1.5}, 0.05, character="c7"))
+    assert message.character == "c7" and message.speed == 0.05 and not message.has_events
+    assert message.aus is not None and len(message.aus) == 19 and dict(message.aus)["AU12"] == 3
+    assert dict(message.aus)["AU6L"] == 1.5 and dict(message.aus)["AU4"] == 0
+    assert parse_message(b'{"character": "c7"}').aus is None  # an id alone changes no state
+    assert parse_message(b'{"Speed": 1, "character": "c7"}').aus == ()  # Speed alone is a full state
+    for data, reason in (
+        (b'{"AU12": 3, "character": "b c"}', Rejection.OUT_OF_RANGE),
+        (b'{"AU12": 3, "character": 5}', Rejection.WRONG_TYPE),
+        (b'{"AU12": 3, "character": true}', Rejection.WRONG_TYPE),
+        (b'{"AU12": 9, "character": "b"}', Rejection.OUT_OF_RANGE),
+        (b'{"AU12": 1, "Speed": 2, "character": "b"}', Rejection.OUT_OF_RANGE),
+    ):
+        with pytest.raises(MessageRejected) as caught:
+            parse_message(data)
+        assert caught.value.reason is reason, data

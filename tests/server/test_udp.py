@@ -162,3 +162,28 @@ def test_bounded_flood_keeps_the_clock_and_ends_on_the_last_state(live, wait_unt
     wait_until(lambda: au_value(live, "a", "AU12L") == 4.5 and au_value(live, "b", "AU12L") == 1.5)
     # the clock went on during the flood (at least half its ticks, on a shared 2-core machine)
     assert live.server.clock.stats.ticks - ticks_before >= 0.5 * elapsed * 60
+
+
+def test_a_laugh_without_its_extra_is_a_counted_rejection_in_health(live, au_value, wait_until) -> None:
+    from mien.errors import MissingExtraError
+
+    def no_extra(*args, **kwargs):
+        raise MissingExtraError("scipy", "laughter")  # what the library raises on an install without the extra
+
+    registry = live.server.registry
+    live.call(lambda: setattr(registry.batch, "laugh", no_extra))
+    with UdpClient("127.0.0.1", live.udp_port) as client:
+        client.laugh("laughter", 1.0, character="a")
+        client.send({"AU12": 3}, speed=1.0, character="b")
+        wait_until(lambda: au_value(live, "b", "AU12L") == 3.0, what="b's state applied")
+        health = wait_until(
+            lambda: (h := httpx.get(f"{live.base_url}/api/health").json())["rejections"] and h, what="a rejection"
+        )
+        assert health["rejections"] == {"missing_extra": 1} and health["tick_errors"] == 0
+        client.laugh("laughter", 1.0, character="b")  # now refused on arrival, before any tick
+        wait_until(
+            lambda: httpx.get(f"{live.base_url}/api/health").json()["rejections"] == {"missing_extra": 2},
+            what="the second laugh refused",
+        )
+    health = httpx.get(f"{live.base_url}/api/health").json()
+    assert health["datagrams_accepted"] == 2 and health["datagrams_received"] == 3

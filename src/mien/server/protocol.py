@@ -115,7 +115,7 @@ AU_CHANNELS: dict[str, tuple[int, ...]] = {
 _EXTENSION_KEYS = frozenset(
     {"Speed", "speeds", "tau_s", "play", "emotion", "intensity", "pad", "laugh", "idle", "character", "watch"}
 )
-_OPENFACS_FAST_KEYS = AU_KEYS | {"Speed"}
+_OPENFACS_FAST_KEYS = AU_KEYS | {"Speed", "character"}
 _NUMBER_TYPES = (int, float)  # JSON numbers; bool is excluded by the exact type test
 _CHARACTER_ID = re.compile(r"^[A-Za-z0-9_.\-]{1,64}$")
 
@@ -193,12 +193,14 @@ class Message:
     """WebSocket: switch the stream to this character id."""
 
     @classmethod
-    def state(cls, aus: tuple[tuple[str, float], ...], speed: float | None) -> Message:
+    def state(cls, aus: tuple[tuple[str, float], ...], speed: float | None, character: str | None = None) -> Message:
         """A plain state message, built without the dataclass ``__init__`` (the UDP hot path: the other fields
         keep their class-level defaults)."""
         message = object.__new__(cls)
         object.__setattr__(message, "aus", aus)
         object.__setattr__(message, "speed", speed)
+        if character is not None:
+            object.__setattr__(message, "character", character)
         return message
 
     @property
@@ -339,18 +341,29 @@ def parse_message(data: bytes | str, max_bytes: int = MAX_MESSAGE_BYTES) -> Mess
     if not isinstance(obj, dict):
         raise MessageRejected(Rejection.NOT_OBJECT, f"expected a JSON object, got {type(obj).__name__}")
     if obj.keys() <= _OPENFACS_FAST_KEYS and b"true" not in data and b"false" not in data:
-        # the common OpenFACS message, checked in bulk: min/max raise TypeError on strings, null, lists and
-        # objects; booleans were ruled out on the raw bytes (AU keys never contain those words)
+        # the common OpenFACS message (with a character id when many faces are driven), checked in bulk: min/max
+        # raise TypeError on strings, null, lists and objects; booleans were ruled out on the raw bytes (AU keys
+        # never contain those words; an id that does takes the full path)
         speed = obj.pop("Speed", None)
+        character = obj.pop("character", None)
         values = obj.values()
         try:
             ok = not obj or (min(values) >= 0.0 and max(values) <= 5.0)
         except TypeError:
             ok = False
-        if ok and (speed is None or (type(speed) in _NUMBER_TYPES and 0.0 <= speed <= 1.0)):
-            return Message.state(tuple(obj.items()), speed)
+        if (
+            ok
+            and (speed is None or (type(speed) in _NUMBER_TYPES and 0.0 <= speed <= 1.0))
+            and (
+                character is None  # an id alone is no state message: the full path
+                or ((obj or speed is not None) and type(character) is str and _CHARACTER_ID.match(character))
+            )
+        ):
+            return Message.state(tuple(obj.items()), speed, character)
         if speed is not None:
             obj["Speed"] = speed  # let the full check below name the bad value
+        if character is not None:
+            obj["character"] = character
     aus: list[tuple[str, float]] = []
     state = False
     extensions = []
