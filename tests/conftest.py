@@ -73,6 +73,19 @@ def _isolated_cache(tmp_path_factory: pytest.TempPathFactory, monkeypatch: pytes
         monkeypatch.setenv("MIEN_CACHE_DIR", str(tmp_path_factory.getbasetemp() / "mien-cache"))
 
 
+FIXTURE_MARKERS = {"chromium": "browser", "postgres_url": "database", "ict_glb": "blender"}
+"""A test that uses one of these fixtures (directly or through another fixture) gets the marker, so
+``-m "not browser"`` or ``-m "not database"`` leaves out every test that would start the service. Tests that
+ask for the fixture at run time (``request.getfixturevalue``) carry the marker on their parameter."""
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    for item in items:
+        for fixture, marker in FIXTURE_MARKERS.items():
+            if fixture in getattr(item, "fixturenames", ()):
+                item.add_marker(marker)
+
+
 CHROMIUM = os.environ.get("MIEN_CHROMIUM", "/usr/bin/chromium")
 CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking"]
 

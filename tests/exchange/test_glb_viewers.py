@@ -156,6 +156,7 @@ print("MIEN_RESULT " + json.dumps(out))
 """
 
 
+@pytest.mark.blender
 def test_blender_imports_shape_keys_and_their_animation(tmp_path: Path) -> None:
     blender = shutil.which("blender")
     if blender is None:

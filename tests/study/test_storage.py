@@ -26,7 +26,7 @@ COLUMNS = ["study", "participant", "session_started_at", "position", "stimulus",
            "nr_shows", "answered_at"]  # fmt: skip
 
 
-@pytest.fixture(params=["sqlite", "postgresql"])
+@pytest.fixture(params=["sqlite", pytest.param("postgresql", marks=pytest.mark.database)])
 def store(request: pytest.FixtureRequest, tmp_path: Path) -> Store:
     if request.param == "sqlite":
         url = database_url(tmp_path / "study.sqlite", tmp_path / "unused.sqlite")
