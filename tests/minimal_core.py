@@ -1,7 +1,8 @@
 """The core on an install with numpy alone: run by ``tests/test_minimal_install.py`` and ``.ci/run`` in a venv
 that holds only numpy and mien. Prints one JSON object of what it saw; the caller asserts on it.
 
-Run as ``python tests/minimal_core.py`` (importing it does nothing, so pytest's doctest collection is harmless).
+Run as ``python tests/minimal_core.py [--check]`` (importing it does nothing, so pytest's doctest collection is
+harmless); ``--check`` also exits 1 naming each broken promise on stderr.
 """
 
 from __future__ import annotations
@@ -56,5 +57,23 @@ def main() -> dict[str, Any]:
     return seen
 
 
+def broken_promises(seen: dict[str, Any]) -> list[str]:
+    """What ``seen`` shows that a numpy-only install must not do (empty when all is well)."""
+    broken = []
+    if seen["imported_by_mien"] != ["numpy"]:
+        broken.append(f"import mien loaded {seen['imported_by_mien']}, not numpy alone")
+    if seen["clip_shape"] != [30, 62] or seen["joy_AU12L_at_0.5s"] <= 3.0:
+        broken.append(f"the core ran wrong: clip {seen['clip_shape']}, joy AU12L {seen['joy_AU12L_at_0.5s']}")
+    if any(error != 0.0 for error in seen["round_trip_max_error"].values()):
+        broken.append(f"CSV/JSON round trip changed values: {seen['round_trip_max_error']}")
+    laugh = seen["laugh"]
+    if laugh != "works" and (laugh["error"] != "MissingExtraError" or "pip install 'mien[" not in laugh["message"]):
+        broken.append(f"a laugh without its extra raised {laugh['error']}: {laugh['message']}")
+    return broken
+
+
 if __name__ == "__main__":
-    print(json.dumps(main()))
+    seen = main()
+    print(json.dumps(seen))
+    if "--check" in sys.argv[1:] and (broken := broken_promises(seen)):
+        sys.exit("\n".join(broken))
