@@ -31,7 +31,7 @@ from mien.render.offscreen import (
     vertex_normals,
 )
 from mien.render.shaders import LIGHTS
-from mien.render.textured_shaders import ALPHA_MODE_IDS, TEXTURED_FRAGMENT_SHADER, TEXTURED_VERTEX_SHADER
+from mien.render.textured_shaders import ALPHA_MODE_IDS, TEXTURED_VERTEX_SHADER, fragment_shader
 
 __all__ = ["TexturedRenderer"]
 
@@ -112,16 +112,19 @@ class TexturedRenderer:
         ctx = self._ctx
         with ctx:
             samples = min(samples, ctx.max_samples)
-            program = ctx.program(vertex_shader=TEXTURED_VERTEX_SHADER, fragment_shader=TEXTURED_FRAGMENT_SHADER)
-            self._program = program
-            for name, (direction, color) in LIGHTS.items():
-                unit = np.asarray(direction, np.float32) / np.linalg.norm(direction)
-                program[f"u_{name}_direction"].value = tuple(unit.tolist())
-                program[f"u_{name}_color"].value = color
-            program["u_base_color"].value = 0
-            self._u_factor = program["u_base_color_factor"]
-            self._u_mode = program["u_alpha_mode"]
-            self._u_cutoff = program["u_alpha_cutoff"]
+            # Two programs: the alpha test's discard (MASK parts only) would cost the others early depth tests.
+            self._programs = {
+                alpha_test: ctx.program(
+                    vertex_shader=TEXTURED_VERTEX_SHADER, fragment_shader=fragment_shader(alpha_test)
+                )
+                for alpha_test in (False, True)
+            }
+            for program in self._programs.values():
+                for name, (direction, color) in LIGHTS.items():
+                    unit = np.asarray(direction, np.float32) / np.linalg.norm(direction)
+                    program[f"u_{name}_direction"].value = tuple(unit.tolist())
+                    program[f"u_{name}_color"].value = color
+                program["u_base_color"].value = 0
             size = (self.width, self.height)
             self._fbo = ctx.framebuffer(
                 color_attachments=[ctx.renderbuffer(size, 4, samples=samples)],
@@ -138,16 +141,20 @@ class TexturedRenderer:
             self._position_buffer = ctx.buffer(mesh.positions.tobytes())
             self._normal_buffer = ctx.buffer(reserve=n * 12)
             self._uv_buffer = ctx.buffer(mesh.uvs.tobytes())
-            self._vao = ctx.vertex_array(
-                program,
-                [
-                    (self._position_buffer, "3f", "in_position"),
-                    (self._normal_buffer, "3f", "in_normal"),
-                    (self._uv_buffer, "2f", "in_uv"),
-                ],
-                index_buffer=ctx.buffer(self._triangles.tobytes()),
-                index_element_size=4,
-            )
+            index_buffer = ctx.buffer(self._triangles.tobytes())
+            self._vaos = {
+                alpha_test: ctx.vertex_array(
+                    program,
+                    [
+                        (self._position_buffer, "3f", "in_position"),
+                        (self._normal_buffer, "3f", "in_normal"),
+                        (self._uv_buffer, "2f", "in_uv"),
+                    ],
+                    index_buffer=index_buffer,
+                    index_element_size=4,
+                )
+                for alpha_test, program in self._programs.items()
+            }
             # The y-flipped projection mirrors the winding: counter-clockwise front faces arrive clockwise.
             ctx.front_face = "cw"
             ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
@@ -197,8 +204,9 @@ class TexturedRenderer:
         view = camera.view_matrix()
         self._view = view
         with self._ctx:
-            self._program["u_view_projection"].write((projection @ view).T.copy().tobytes())
-            self._program["u_view"].write(view.T.copy().tobytes())
+            for program in self._programs.values():
+                program["u_view_projection"].write((projection @ view).T.copy().tobytes())
+                program["u_view"].write(view.T.copy().tobytes())
 
     def _draw(self, batch: _Batch) -> None:
         material = batch.material
@@ -209,10 +217,13 @@ class TexturedRenderer:
             ctx.enable(ctx.CULL_FACE)
         texture = material.base_color_texture
         (self._white if texture is None else self._textures[id(texture)]).use(0)
-        self._u_factor.value = material.base_color_factor
-        self._u_mode.value = ALPHA_MODE_IDS[material.alpha_mode.value]
-        self._u_cutoff.value = material.alpha_cutoff
-        self._vao.render(vertices=batch.count, first=batch.first)
+        alpha_test = material.alpha_mode is AlphaMode.MASK
+        program = self._programs[alpha_test]
+        program["u_base_color_factor"].value = material.base_color_factor
+        program["u_alpha_mode"].value = ALPHA_MODE_IDS[material.alpha_mode.value]
+        if alpha_test:
+            program["u_alpha_cutoff"].value = material.alpha_cutoff
+        self._vaos[alpha_test].render(vertices=batch.count, first=batch.first)
 
     def render(self, vertices: np.ndarray | None = None, out: np.ndarray | None = None) -> np.ndarray:
         """Render the mesh at ``vertices`` ((n, 3), the rest positions when None) to a (height, width, 3) image.
