@@ -40,7 +40,7 @@ from mien.facs.catalogue import FACE_CHANNELS, POSE_CHANNELS
 from mien.facs.clip import Clip
 from mien.facs.dynamics import FacsBatch, RowIndex, TimedAction
 from mien.facs.envelope import Envelope
-from mien.facs.idle import IdleBatch, IdleSettings
+from mien.facs.idle import IDLE_COLUMNS, IdleBatch, IdleSettings
 from mien.facs.intensity import AUSpec
 from mien.small_matmul import matmul_rows
 
@@ -61,6 +61,7 @@ def _mouth_channel_ids() -> np.ndarray:
 
 _MOUTH = _mouth_channel_ids()
 _MOUTH_OF = operator.itemgetter(*_MOUTH.tolist())
+_IDLE_VALUES = operator.itemgetter(*IDLE_COLUMNS.tolist())
 
 
 def _idle_settings(idle: IdleSettings | bool) -> IdleSettings | None:
@@ -475,7 +476,7 @@ class CharacterBatch:
                 values = frames[0].tolist()
                 mouth = max(0.0, 1.0 - max(0.0, *_MOUTH_OF(values)) / 2.0)
                 idle.apply_row(t, values, 0.0 if laughing is not None and laughing[0] else mouth)
-                frames[0] = values
+                frames[0, IDLE_COLUMNS] = _IDLE_VALUES(values)  # the rest of the row is unchanged
         else:
             mouth_scale = np.maximum(0.0, 1.0 - frames[:, _MOUTH].max(axis=1, initial=0.0) / 2.0)
             if laughing is not None:

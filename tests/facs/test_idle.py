@@ -132,7 +132,7 @@ def test_walks_keep_the_seeded_stream_across_the_old_block_boundary():
 def test_every_step_draws_the_same_amount_of_randomness(monkeypatch):
     """No step of a batch computes ahead: each 60 Hz step advances the walks one tick, one draw of (n, 10) uniforms.
 
-    A batch of one row draws 64 ticks at a time instead (one numpy call a second, not one a tick).
+    A batch of one row draws 16 ticks at a time instead (numpy's cost per call, not per number, dominates it).
     """
     import mien.facs.idle as idle_module
 
@@ -145,7 +145,9 @@ def test_every_step_draws_the_same_amount_of_randomness(monkeypatch):
         return values
 
     monkeypatch.setattr(idle_module, "uniform_from_keys", counting)
-    for n_rows, expected in ((4, {4 * 10}), (1, {0, 64 * 10})):
+    block = idle_module._DRAW_BLOCK
+    assert block == 16
+    for n_rows, expected in ((4, {4 * 10}), (1, {0, block * 10})):
         batch = IdleBatch(np.arange(n_rows), IdleSettings(blink=False, gaze=False))
         frames = np.zeros((n_rows, len(FACE_CHANNELS)))
         per_step = []
@@ -154,7 +156,7 @@ def test_every_step_draws_the_same_amount_of_randomness(monkeypatch):
             batch.apply(i / 60.0, frames)
             per_step.append(sum(sizes))
         assert set(per_step) == expected
-        assert sum(per_step) == (n_rows * 10 * 1199 if n_rows > 1 else 64 * 10 * 19)
+        assert sum(per_step) == (n_rows * 10 * 1199 if n_rows > 1 else block * 10 * 75)  # ticks 0..1198
 
 
 def test_a_row_of_one_equals_a_row_of_a_batch_at_any_step_times():

@@ -19,7 +19,9 @@ batch of one, so both are the same code.
 from __future__ import annotations
 
 import math
+import operator
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -29,6 +31,7 @@ from mien.facs.counter_random import normal, stream_keys, uniform, uniform_from_
 
 __all__ = [
     "EYELID_WALK",
+    "IDLE_COLUMNS",
     "MOUTH_WALK",
     "NECK_WALK",
     "Idle",
@@ -168,10 +171,15 @@ _NUMBERS = (
     "wobble_period_s",
 )
 _WALK_STREAMS = np.arange(2 * len(_WALKS), dtype=np.uint64)  # walk i: stream 2i (move?), 2i + 1 (direction)
-_WALK_PARAMS = tuple((w.a, w.b, w.step, w.move_probability) for w in _WALKS)
-_DRAW_BLOCK = 64
-"""Ticks of walk draws a batch of one row makes at a time (about 1 s at 60 Hz)."""
+_WALK_PARAMS = tuple((i, w.a, w.b, w.step, w.move_probability) for i, w in enumerate(_WALKS))
+_DRAW_BLOCK = 16
+"""Walk ticks (or blink intervals, or fixations) a batch of one row draws at a time: one numpy call costs
+about the same for 1 or 16 draws, and a block of 16 is a small step-time spike every 16 ticks."""
 _AU12L, _AU15L, _AU5L, _AU43L, _AU45L = (pair.start for pair in (_AU12, _AU15, _AU5, _AU43, _AU45))
+IDLE_COLUMNS = np.r_[_AU5, _AU12, _AU15, _AU43, _AU45, _YAW, _ROLL, _GAZE_YAW]
+"""(13,) face-frame columns idle motion writes (AU5, AU12, AU15, AU43, AU45 left and right, head yaw and roll,
+gaze yaw): after :meth:`IdleBatch.apply_row` the rest of the frame is unchanged."""
+_IDLE_VALUES = operator.itemgetter(*IDLE_COLUMNS.tolist())
 _ONE_ROW_GAINS = ("mouth", "eyelids", "neck_yaw", "neck_roll", "blink", "gaze", "wobble_yaw", "wobble_roll")
 
 
@@ -195,11 +203,21 @@ class _OneRow:
     roll_phase: float
 
 
-@dataclass(frozen=True)
-class _OneRowEvents:
-    """The blink and fixation state of a batch of one row, as Python floats (names of :class:`IdleBatch`)."""
+@dataclass
+class _Block:
+    """Draws ``first``, ``first + 1``, ... of a one-row stream (blink intervals, fixations)."""
 
+    first: int = 0
+    values: list[Any] = field(default_factory=list)
+
+
+@dataclass
+class _OneRowEvents:
+    """The blink and fixation state of a batch of one row as Python values, ahead of the arrays of the same names."""
+
+    _blink_k: int
     _blink_start: float
+    _fix_k: int
     _fix_start: float
     _fix_end: float
     _gaze_from: float
@@ -228,8 +246,10 @@ def _fixation(
 class IdleBatch:
     """Idle behaviour of n characters (rows, one seed and one :class:`IdleSettings` each), vectorised.
 
-    Every step costs about the same: the random walks advance tick by tick (no block is precomputed), and
-    blinks and fixations are drawn one at a time when due. A row's idle starts when the row is added (at
+    Every step of a batch costs about the same: the random walks advance tick by tick (no block is
+    precomputed), and blinks and fixations are drawn one at a time when due. A batch of one row runs on
+    Python floats instead (:meth:`apply_row`; the same numbers) and draws 16 ticks, blinks or fixations at a
+    time, since numpy costs it per call, not per number. A row's idle starts when the row is added (at
     ``t_s``; walks at 0, the first blink and fixation drawn from there); times must not decrease.
 
     >>> batch = IdleBatch(np.array([1, 2]))
@@ -266,6 +286,8 @@ class IdleBatch:
         self._one: _OneRow | None = None  # the gains of a batch of one row, as Python floats
         self._events_one: _OneRowEvents | None = None  # its blink and fixation state (None: read the arrays)
         self._draws: list[list[float]] = []  # a batch of one: walk draws of ticks _draws_from, _draws_from + 1, ...
+        self._walk_one_state: list | None = None  # a batch of one: [tick, positions] ahead of the arrays
+        self._blink_block, self._fix_block = _Block(), _Block()  # a batch of one: blink intervals, fixations
         self._draws_from = 0
         self.add_rows(seeds, settings if settings is not None else IdleSettings())
 
@@ -281,6 +303,8 @@ class IdleBatch:
 
     def add_rows(self, seeds: np.ndarray, settings: IdleSettings | None = None, t_s: float = 0.0) -> None:
         """Append rows for ``seeds`` ((k,) non-negative ints) with ``settings``, starting at ``t_s``."""
+        self._store_walk_one()
+        self._store_events_one()
         count = len(seeds)
         first = self.n_rows
         self.seeds = np.concatenate([self.seeds, np.zeros(count, np.uint64)])
@@ -306,6 +330,8 @@ class IdleBatch:
         rows = np.atleast_1d(rows)
         if rows.size == 0:
             return
+        self._store_walk_one()
+        self._store_events_one()
         values = np.atleast_1d(np.asarray(seeds))
         if values.dtype.kind not in "iu" or np.any(values < 0):
             raise InvalidValueError("seed", seeds, "non-negative integers")
@@ -333,6 +359,7 @@ class IdleBatch:
         self._phase[rows] = _wobble_phase(seed[:, None])
         self._walk_keys[rows] = stream_keys(seed[:, None], _WALK_STREAMS[None, :])
         self._draws = []
+        self._blink_block, self._fix_block = _Block(), _Block()
         self._update_amplitudes()
 
     def _update_amplitudes(self) -> None:
@@ -368,6 +395,7 @@ class IdleBatch:
 
         Advances each row's walks tick by tick (``tick_hz``) up to ``t_s``; returns the batch's own array.
         """
+        self._store_walk_one()
         target = np.floor(t_s * self._num["tick_hz"] + _TICK_SLACK).astype(np.int64)
         lag = target - self._tick
         if not lag.size:
@@ -389,7 +417,7 @@ class IdleBatch:
 
     def blink(self, t_s: float) -> np.ndarray:
         """(n,) lid closure 0..1 from spontaneous blinks at ``t_s`` (times must not decrease)."""
-        self._events_one = None
+        self._store_events_one()
         duration = self._num["blink_duration_s"]
         due = t_s >= self._blink_start + duration
         while due.any():
@@ -408,7 +436,7 @@ class IdleBatch:
 
     def gaze_yaw(self, t_s: float) -> np.ndarray:
         """(n,) gaze yaw (degrees) from fixation shifts at ``t_s`` (times must not decrease)."""
-        self._events_one = None
+        self._store_events_one()
         due = t_s >= self._fix_end
         while due.any():
             rows = np.flatnonzero(due)
@@ -435,7 +463,7 @@ class IdleBatch:
         if self._one is not None and isinstance(mouth_scale, float | int):
             values = frames[0].tolist()
             self.apply_row(t_s, values, float(mouth_scale))
-            frames[0] = values
+            frames[0, IDLE_COLUMNS] = _IDLE_VALUES(values)
             return
         amp = self._amp
         if self._walking:
@@ -465,8 +493,9 @@ class IdleBatch:
         """:meth:`apply` for a batch of one row, into its (62,) face frame as a list of floats, in place.
 
         The same arithmetic on Python floats: numpy costs about a microsecond a call whatever the array's
-        size, which for one row is most of the cost. The walks draw their random numbers :data:`_DRAW_BLOCK`
-        ticks at a time; a new blink or fixation is drawn by the vectorised methods (the same code).
+        size, which for one row is most of the cost. Walk ticks, blink intervals and fixations are drawn
+        :data:`_DRAW_BLOCK` at a time with the vectorised code's functions (the same numbers). The row's
+        state runs ahead of the arrays until a vectorised method needs them.
         """
         one = self._one
         if one is None:
@@ -489,23 +518,30 @@ class IdleBatch:
         events = self._events_one
         if events is None:
             events = self._events_one = _OneRowEvents(
-                *(float(getattr(self, name)[0]) for name in _OneRowEvents.__dataclass_fields__)
+                *(getattr(self, name)[0].item() for name in _OneRowEvents.__dataclass_fields__)
             )
         if self._blinking:
             duration = one.blink_duration_s
-            if t_s >= events._blink_start + duration:
-                level = float(self.blink(t_s)[0])  # the next blink is drawn
-            else:
-                elapsed = t_s - events._blink_start
-                half = 0.5 * duration
-                level = 1.0 - abs(elapsed - half) / half if 0.0 < elapsed < duration else 0.0
+            while t_s >= events._blink_start + duration:  # the next blink (blink())
+                events._blink_k += 1
+                events._blink_start += self._drawn_one(self._blink_block, events._blink_k)
+            elapsed = t_s - events._blink_start
+            half = 0.5 * duration
+            level = 1.0 - abs(elapsed - half) / half if 0.0 < elapsed < duration else 0.0
             level *= one.blink
             values[_AU45L] = max(values[_AU45L], level)
             values[_AU45L + 1] = max(values[_AU45L + 1], level)
         if self._gazing:
-            if t_s >= events._fix_end or one.saccade_s <= 0.0:
-                gaze = float(self.gaze_yaw(t_s)[0])  # the next fixation is drawn
+            if one.saccade_s <= 0.0:
+                gaze = float(self.gaze_yaw(t_s)[0])
             else:
+                while t_s >= events._fix_end:  # the next fixation (gaze_yaw())
+                    events._fix_k += 1
+                    events._gaze_from = events._gaze_to
+                    hold, yaw = self._drawn_one(self._fix_block, events._fix_k)
+                    events._fix_start = events._fix_end
+                    events._fix_end += hold
+                    events._gaze_to = yaw
                 progress = min((t_s - events._fix_start) / one.saccade_s, 1.0)
                 gaze = events._gaze_from + (events._gaze_to - events._gaze_from) * progress
             values[_GAZE_YAW] += one.gaze * gaze
@@ -515,27 +551,63 @@ class IdleBatch:
             values[_ROLL] += one.wobble_roll * math.sin(angle / 1.37 + one.roll_phase)
 
     def _walk_one(self, t_s: float, tick_hz: float) -> list[float]:
-        """:meth:`walk_positions` of a batch of one row, on Python floats (the same steps and draws)."""
-        tick = int(self._tick[0])
+        """:meth:`walk_positions` of a batch of one row, on Python floats (the same steps and draws).
+
+        The row's tick and positions live in :attr:`_walk_one_state` until a vectorised method needs the
+        arrays (:meth:`_store_walk_one`).
+        """
+        state = self._walk_one_state
+        if state is None:
+            state = self._walk_one_state = [int(self._tick[0]), self._m[0].tolist()]
+        tick, m = state
         target = math.floor(t_s * tick_hz + _TICK_SLACK)
-        m = self._m[0].tolist()
         if target <= tick:
             return m
-        draws = self._draws
+        draws, first = self._draws, self._draws_from
         for k in range(tick, target):
-            if not self._draws_from <= k < self._draws_from + len(draws):
+            if not first <= k < first + len(draws):
                 ticks = np.arange(k, k + _DRAW_BLOCK, dtype=np.uint64)[:, None]
                 draws = self._draws = uniform_from_keys(self._walk_keys[0][None, :], ticks).tolist()
-                self._draws_from = k
-            u = draws[k - self._draws_from]
-            for i, (a, b, step, move) in enumerate(_WALK_PARAMS):
+                first = self._draws_from = k
+            u = draws[k - first]
+            for i, a, b, step, move in _WALK_PARAMS:
                 if u[2 * i] < move:
-                    stepped = m[i] + step if u[2 * i + 1] < 1.0 - (a + b * m[i]) else m[i] - step
-                    m[i] = max(min(stepped, 1.0), -1.0)
-        self._m[0] = m
-        self._tick[0] = target
+                    x = m[i]
+                    x = x + step if u[2 * i + 1] < 1.0 - (a + b * x) else x - step
+                    m[i] = 1.0 if x > 1.0 else -1.0 if x < -1.0 else x  # np.minimum, np.maximum
+        state[0] = target
         return m
 
+    def _drawn_one(self, block: _Block, k: int) -> Any:
+        """Draw ``k`` of a one-row block (blink intervals or fixations), drawing :data:`_DRAW_BLOCK` more when due."""
+        if not block.first <= k < block.first + len(block.values):
+            seed = np.full(_DRAW_BLOCK, self.seeds[0])
+            ks = np.arange(k, k + _DRAW_BLOCK, dtype=np.uint64)
+            num = {name: np.full(_DRAW_BLOCK, values[0]) for name, values in self._num.items()}
+            if block is self._blink_block:
+                intervals = _blink_interval(num["blink_mean_s"], num["blink_sd_s"], num["blink_duration_s"], seed, ks)
+                block.values = intervals.tolist()
+            else:
+                low, high = np.full(_DRAW_BLOCK, self._hold_low[0]), np.full(_DRAW_BLOCK, self._hold_high[0])
+                hold, yaw = _fixation(low, high, num["gaze_yaw_deg"], seed, ks)
+                block.values = list(zip(hold.tolist(), yaw.tolist(), strict=True))
+            block.first = k
+        return block.values[k - block.first]
+
+    def _store_events_one(self) -> None:
+        """Write the one-row blink and fixation state back into the arrays (before a vectorised method reads them)."""
+        events = self._events_one
+        if events is not None:
+            for name in _OneRowEvents.__dataclass_fields__:
+                getattr(self, name)[0] = getattr(events, name)
+            self._events_one = None
+
+    def _store_walk_one(self) -> None:
+        """Write the one-row walk state back into the arrays (before a vectorised method reads them)."""
+        state = self._walk_one_state
+        if state is not None:
+            self._tick[0], self._m[0] = state
+            self._walk_one_state = None
 
 class Idle:
     """Idle behaviour of one character: an :class:`IdleBatch` of one row (one implementation of both)."""
