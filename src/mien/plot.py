@@ -6,7 +6,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from mien.errors import MissingExtraError
+from mien.extras import require
 from mien.facs.clip import Clip
 
 __all__ = ["plot_clip", "pyplot"]
@@ -14,14 +14,8 @@ __all__ = ["plot_clip", "pyplot"]
 
 def pyplot() -> Any:
     """``matplotlib.pyplot`` on the headless Agg backend, or :class:`MissingExtraError` naming ``mien[plot]``."""
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        raise MissingExtraError("matplotlib", "plot") from None
-    return plt
+    require("matplotlib", "plot").use("Agg")
+    return require("matplotlib.pyplot", "plot")
 
 
 def plot_clip(

@@ -6,6 +6,8 @@ import sys
 from collections.abc import Iterable, Iterator
 from typing import TypeVar
 
+from mien.extras import available
+
 __all__ = ["progress"]
 
 T = TypeVar("T")
@@ -17,13 +19,13 @@ def progress(items: Iterable[T], total: int | None = None, desc: str = "", enabl
     if not enabled or not sys.stderr.isatty():
         yield from items
         return
-    try:
-        from tqdm import tqdm
-    except ImportError:
+    if not available("tqdm"):
         count = 0
         for count, item in enumerate(items, 1):
             yield item
             print(f"\r{desc} {count}/{total or '?'}", end="", file=sys.stderr, flush=True)
         print(file=sys.stderr)
         return
+    from tqdm import tqdm
+
     yield from tqdm(items, total=total, desc=desc, file=sys.stderr, dynamic_ncols=True)

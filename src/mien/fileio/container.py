@@ -20,6 +20,7 @@ one :class:`~mien.errors.InvalidValueError` naming the file. Arrays are read wit
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import zipfile
@@ -97,7 +98,9 @@ def load_container(source: Source, kind: str | None = None, max_version: int | N
     if isinstance(source, (str, os.PathLike)) and not Path(source).is_file():
         raise MissingAssetError(f"{source}: no such file; check the path")
     try:
-        with np.load(source, allow_pickle=False) as data:
+        with contextlib.ExitStack() as stack:  # open a path here: np.load leaks the handle of a damaged file
+            stream = stack.enter_context(open(source, "rb")) if isinstance(source, (str, os.PathLike)) else source
+            data = stack.enter_context(np.load(stream, allow_pickle=False))
             if META_KEY not in data.files:
                 raise InvalidValueError(f"{name}", sorted(data.files), f"a mien container (a {META_KEY!r} array)")
             meta = json.loads(str(data[META_KEY][()]))

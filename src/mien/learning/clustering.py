@@ -30,7 +30,8 @@ from typing import Literal
 
 import numpy as np
 
-from mien.errors import InvalidValueError, MissingExtraError
+from mien.errors import InvalidValueError
+from mien.extras import require
 from mien.learning.barycenter import dtw_barycenter
 from mien.learning.dtw import SeriesInput, as_series_list, dtw_cross_distance_matrix, dtw_distance_matrix
 
@@ -74,10 +75,7 @@ def _fasterpam(distances: np.ndarray, k: int, seed: int, n_init: int) -> tuple[n
     if k == 1:
         medoid = int(np.argmin(distances.sum(axis=1)))
         return np.zeros(n, dtype=np.int64), np.array([medoid]), float(distances[medoid].sum())
-    try:
-        import kmedoids
-    except ImportError:
-        raise MissingExtraError("kmedoids", "laughter") from None
+    kmedoids = require("kmedoids", "laughter")
     best: tuple[np.ndarray, np.ndarray, float] | None = None
     seeds = np.random.SeedSequence(seed).generate_state(n_init)
     for run_seed in seeds:

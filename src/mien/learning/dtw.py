@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from mien.errors import InvalidValueError
+from mien.extras import available, require
 
 __all__ = [
     "as_series",
@@ -46,15 +47,13 @@ __all__ = [
 ]
 
 _numba: Any
-try:
-    import numba as _numba
-
+_HAVE_NUMBA = available("numba")
+if _HAVE_NUMBA:
+    _numba = require("numba", "fast")
     _njit: Callable[..., Any] = _numba.njit
     _prange: Callable[..., Any] = _numba.prange
-    _HAVE_NUMBA = True
-except ImportError:  # pragma: no cover - exercised only without numba
+else:  # pragma: no cover - exercised only without numba
     _numba = None
-    _HAVE_NUMBA = False
     _prange = range
 
     def _njit(*args: Any, **kwargs: Any) -> Any:

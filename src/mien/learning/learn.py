@@ -34,7 +34,8 @@ from typing import Any
 
 import numpy as np
 
-from mien.errors import InvalidValueError, MienError, MissingExtraError
+from mien.errors import InvalidValueError, MienError
+from mien.extras import require
 from mien.facs.clip import Clip, interpolate_frames
 from mien.fileio.hashing import key_sha256
 from mien.laughter.library import LaughLibrary, LibraryMetadata, utc_now
@@ -319,11 +320,7 @@ def _connect(scheduler: Any) -> tuple[Any, bool]:
         return None, False
     if not isinstance(scheduler, str):
         return scheduler, False
-    try:
-        from dask.distributed import Client
-    except ImportError:
-        raise MissingExtraError("dask.distributed", "distributed") from None
-    return Client(scheduler), True
+    return require("dask.distributed", "distributed").Client(scheduler), True
 
 
 # ------------------------------------------------------------------------------------------- learning

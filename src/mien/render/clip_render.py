@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mien.errors import InvalidValueError, MienError
+from mien.errors import InvalidValueError
 from mien.progress import progress as progress_bar
 from mien.render.appearance import rig_vertex_colors, visible_faces
 from mien.render.camera import Camera
@@ -24,6 +24,7 @@ from mien.render.offscreen import DEFAULT_BACKGROUND, OffscreenRenderer
 from mien.render.video import write_mp4, write_png
 from mien.rig.deform import Deformer
 from mien.rig.model import Rig
+from mien.rig.pose import apply_pose
 
 __all__ = ["POSE_COLUMNS", "iter_frames", "make_renderer", "render_clip", "render_still"]
 
@@ -32,10 +33,6 @@ POSE_COLUMNS = ("head_yaw_deg", "head_pitch_deg", "head_roll_deg", "gaze_yaw_deg
 
 
 def _pose_function() -> Callable[..., np.ndarray]:
-    try:
-        from mien.rig.pose import apply_pose
-    except ImportError as error:
-        raise MienError(f"head and gaze poses need mien.rig.pose.apply_pose, which is unavailable: {error}") from None
     return apply_pose
 
 

@@ -7,7 +7,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from mien.errors import InvalidValueError, MissingExtraError
+from mien.errors import InvalidValueError
+from mien.extras import require
 
 __all__ = ["contact_sheet"]
 
@@ -50,10 +51,8 @@ def contact_sheet(
         raise InvalidValueError("columns", columns, "an integer >= 1")
     if padding < 0 or font_size < 1:
         raise InvalidValueError("padding/font_size", (padding, font_size), "padding >= 0 and font_size >= 1")
-    try:
-        from PIL import Image, ImageDraw, ImageFont
-    except ImportError:
-        raise MissingExtraError("pillow", "render") from None
+    require("PIL", "render")
+    from PIL import Image, ImageDraw, ImageFont
 
     rows = math.ceil(len(checked) / columns)
     tile_h = max(image.shape[0] for image in checked)

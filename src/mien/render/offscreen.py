@@ -21,7 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from mien.errors import InvalidValueError, MienError, MissingExtraError
+from mien.errors import InvalidValueError, MienError
+from mien.extras import available, require
 from mien.render.camera import Camera
 from mien.render.shaders import FRAGMENT_SHADER, LIGHTS, VERTEX_SHADER
 
@@ -49,11 +50,7 @@ class EGLUnavailableError(MienError, RuntimeError):
 
 
 def _require_moderngl() -> types.ModuleType:
-    try:
-        import moderngl
-    except ImportError:
-        raise MissingExtraError("moderngl", "render") from None
-    return moderngl
+    return require("moderngl", "render")
 
 
 def _normals_numpy(vertices: np.ndarray, faces: np.ndarray, out: np.ndarray) -> None:
@@ -75,11 +72,10 @@ def _numba_kernel() -> Any:
     """The numba normals kernel, compiled on first use (None when numba is not installed)."""
     global _NUMBA_KERNEL
     if _NUMBA_KERNEL is None:
-        try:
-            import numba
-        except ImportError:
+        if not available("numba"):
             _NUMBA_KERNEL = False
             return False
+        import numba
 
         @numba.njit(cache=True, fastmath=True, nogil=True)
         def kernel(vertices: np.ndarray, faces: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover

@@ -22,7 +22,8 @@ from typing import IO
 
 import numpy as np
 
-from mien.errors import InvalidValueError, MienError, MissingExtraError
+from mien.errors import InvalidValueError, MienError
+from mien.extras import require
 from mien.fileio.streams import atomic_path, temporary_path
 from mien.progress import progress as progress_bar
 
@@ -43,11 +44,7 @@ X264_PRESETS = (
 
 
 def _ffmpeg_exe() -> str:
-    try:
-        import imageio_ffmpeg
-    except ImportError:
-        raise MissingExtraError("imageio-ffmpeg", "render") from None
-    return str(imageio_ffmpeg.get_ffmpeg_exe())
+    return str(require("imageio_ffmpeg", "render").get_ffmpeg_exe())
 
 
 def partial_path(path: str | os.PathLike[str]) -> Path:
@@ -240,14 +237,11 @@ def write_png(image: np.ndarray, path: str | os.PathLike[str], compress_level: i
     ``compress_level`` 0..9 trades speed for size (1 is several times faster than 6 for frame sequences).
     """
     image = _check_image(image)
-    try:
-        from PIL import Image
-    except ImportError:
-        raise MissingExtraError("pillow", "render") from None
+    image_module = require("PIL.Image", "render")
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path) as temporary:
-        Image.fromarray(image).save(temporary, format="PNG", compress_level=compress_level)
+        image_module.fromarray(image).save(temporary, format="PNG", compress_level=compress_level)
     return path
 
 
@@ -276,10 +270,7 @@ class VideoInfo:
 
 def read_video_info(path: str | os.PathLike[str]) -> VideoInfo:
     """Frame count, fps, size, codec and pixel format of the video at ``path`` (PyAV; counts packets)."""
-    try:
-        import av
-    except ImportError:
-        raise MissingExtraError("av", "track") from None
+    av = require("av", "track")
     with av.open(str(path)) as container:
         stream = container.streams.video[0]
         n_frames = sum(1 for packet in container.demux(stream) if packet.size)

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from mien.errors import InvalidValueError, MissingExtraError
+from mien.extras import available
 from mien.rig.model import Rig
 
 __all__ = ["BACKENDS", "Deformer", "numba_available"]
@@ -31,11 +32,7 @@ RUN_GAP = 8
 
 def numba_available() -> bool:
     """True when numba can be imported (the ``mien[fast]`` extra)."""
-    try:
-        import numba  # noqa: F401
-    except ImportError:
-        return False
-    return True
+    return available("numba")
 
 
 def _runs(ids: np.ndarray, deltas: np.ndarray, gap: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mien.errors import InvalidValueError
+from mien.extras import available
 
 __all__ = ["EdgeGraph"]
 
@@ -55,11 +56,11 @@ class EdgeGraph:
         src = np.unique(np.asarray(sources, dtype=np.int64))
         if src.size == 0 or src.min() < 0 or src.max() >= self.n_vertices:
             raise InvalidValueError("sources", sources, f"vertex ids in 0..{self.n_vertices - 1}")
-        try:
-            from scipy.sparse import csr_matrix
-            from scipy.sparse.csgraph import dijkstra
-        except ImportError:
+        if not available("scipy.sparse.csgraph"):
             return self._distances_heap(src, limit_m)
+        from scipy.sparse import csr_matrix
+        from scipy.sparse.csgraph import dijkstra
+
         graph = csr_matrix((self.lengths, self.indices, self.indptr), shape=(self.n_vertices, self.n_vertices))
         out = dijkstra(graph, directed=True, indices=src, limit=limit_m, min_only=True)
         return np.asarray(out, dtype=np.float64)
@@ -73,12 +74,12 @@ class EdgeGraph:
         A path never jumps a gap in the mesh (the mouth slit, an eye opening), so a chain of landmarks along a
         lid or lip gives that lid's or lip's vertices.
         """
-        try:
-            from scipy.sparse import csr_matrix
-            from scipy.sparse.csgraph import dijkstra
-        except ImportError:
+        if not available("scipy.sparse.csgraph"):
             dist, previous = self._dijkstra(np.asarray([int(start)]), np.inf)
         else:
+            from scipy.sparse import csr_matrix
+            from scipy.sparse.csgraph import dijkstra
+
             graph = csr_matrix((self.lengths, self.indices, self.indptr), shape=(self.n_vertices, self.n_vertices))
             dist, previous = dijkstra(graph, directed=True, indices=int(start), return_predecessors=True)
         if not np.isfinite(dist[end]):
@@ -112,11 +113,11 @@ class EdgeGraph:
     def component(self, seeds: np.ndarray | list[int]) -> np.ndarray:
         """(n_vertices,) bool: vertices joined by edges to any of ``seeds``."""
         seeds = np.asarray(seeds, dtype=np.int64)
-        try:
-            from scipy.sparse import csr_matrix
-            from scipy.sparse.csgraph import connected_components
-        except ImportError:
+        if not available("scipy.sparse.csgraph"):
             return np.isfinite(self.distances(seeds))
+        from scipy.sparse import csr_matrix
+        from scipy.sparse.csgraph import connected_components
+
         graph = csr_matrix((self.lengths, self.indices, self.indptr), shape=(self.n_vertices, self.n_vertices))
         _, labels = connected_components(graph, directed=False)
         return np.asarray(np.isin(labels, labels[seeds]))

@@ -26,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from mien.errors import InvalidValueError
+from mien.extras import available
 
 __all__ = ["COT_CLIP", "BiharmonicSystem", "biharmonic_fill", "cotan_laplacian"]
 
@@ -135,10 +136,10 @@ class BiharmonicSystem:
         self._q: object | None = None
         self._csr: tuple[_Csr, _Csr] | None = None
         r_, c_, w_ = self._lap
-        try:
-            from scipy.sparse import coo_matrix, diags
-        except ImportError:
+        if not available("scipy.sparse"):
             return
+        from scipy.sparse import coo_matrix, diags
+
         lmat = coo_matrix((w_, (r_, c_)), shape=(self.n_vertices, self.n_vertices)).tocsr()
         self._q = (lmat.T @ diags(self._inv_area) @ lmat).tocsr()
 

@@ -31,7 +31,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from mien.errors import InvalidValueError, MissingExtraError, UnknownNameError
+from mien.errors import InvalidValueError, UnknownNameError
+from mien.extras import require
 from mien.study.anova import AnovaTable, rm_anova
 from mien.study.quality import LABEL_PREFIX, label_intensity, label_question, quality_table
 
@@ -121,11 +122,7 @@ class StudyAnalysis:
 
 
 def _need_pandas() -> Any:
-    try:
-        import pandas as pd
-    except ImportError:
-        raise MissingExtraError("pandas", "study") from None
-    return pd
+    return require("pandas", "study")
 
 
 def _level_text(value: object) -> str:

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mien.errors import MissingExtraError
+from mien.extras import require
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -156,10 +156,7 @@ def rm_anova(trials: pd.DataFrame, measure: str, factors: Sequence[str], subject
 def _pingouin(cells: pd.DataFrame, subject: str, used: list[str], measure: str) -> pd.DataFrame:
     import warnings
 
-    try:
-        import pingouin
-    except ImportError:
-        raise MissingExtraError("pingouin", "study") from None
+    pingouin = require("pingouin", "study")
     from scipy import stats
 
     safe = {f: f"factor{i}" for i, f in enumerate(used)}  # a level named like the measure breaks pingouin's melt

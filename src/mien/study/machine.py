@@ -25,6 +25,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from mien.extras import available
+
 if TYPE_CHECKING:
     import pandas as pd
 
@@ -100,9 +102,7 @@ def machine_unavailable(
         require_asset("emotion_model", emotion_model)
     except MienError as error:
         return str(error)
-    try:
-        import mediapipe  # noqa: F401
-    except ImportError:
+    if not available("mediapipe"):
         return "mediapipe is not installed: pip install 'mien[validate]'"
     return ""
 

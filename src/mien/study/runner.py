@@ -32,7 +32,7 @@ from collections.abc import AsyncIterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from mien.errors import MissingExtraError
+from mien.extras import require
 
 if TYPE_CHECKING:
     from fastapi import FastAPI
@@ -73,13 +73,11 @@ BUILTIN_INSTRUCTIONS = {
 def create_app(design: "Design", manifest: dict[str, Any], stimuli_folder: str | Path, store: "Store") -> "FastAPI":
     """The experiment app for ``design`` with the stimuli of ``manifest`` (served from ``stimuli_folder``),
     storing into ``store`` (whose stimuli table should hold the manifest: :meth:`Store.register_stimuli`)."""
-    try:
-        from fastapi import FastAPI, HTTPException, Request
-        from fastapi.responses import FileResponse, JSONResponse, Response
-        from fastapi.staticfiles import StaticFiles
-        from pydantic import BaseModel, Field
-    except ImportError:
-        raise MissingExtraError("fastapi", "study") from None
+    require("fastapi", "study")
+    from fastapi import FastAPI, HTTPException, Request
+    from fastapi.responses import FileResponse, JSONResponse, Response
+    from fastapi.staticfiles import StaticFiles
+    from pydantic import BaseModel, Field
 
     from mien.study.protocol import participant_plan, questions
     from mien.study.storage import StorageUnavailableError
@@ -294,10 +292,7 @@ def listen(host: str = "127.0.0.1", port: int = 8000) -> socket.socket:
 
 def serve(app: "FastAPI", sock: socket.socket) -> None:
     """Run ``app`` with uvicorn on the listening socket ``sock`` (see :func:`listen`) until interrupted."""
-    try:
-        import uvicorn
-    except ImportError:
-        raise MissingExtraError("uvicorn", "study") from None
+    uvicorn = require("uvicorn", "study")
     # keep-alive longer than a participant's time per stimulus, so the browser reuses its connection
     config = uvicorn.Config(app, log_level="warning", access_log=False, timeout_keep_alive=75)
     uvicorn.Server(config).run(sockets=[sock])

@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from mien.errors import InvalidValueError, MissingAssetError
+from mien.extras import require
 from mien.fileio.hashing import file_sha256
 from mien.fileio.streams import atomic_path, write_text
 
@@ -58,15 +59,10 @@ def check_video(path: str | os.PathLike[str]) -> tuple[float, float]:
     Raises :class:`~mien.errors.MissingAssetError` when the file is missing and
     :class:`~mien.errors.InvalidValueError` naming the file when it does not decode.
     """
-    from mien.errors import MissingExtraError
-
     path = Path(path)
     if not path.is_file():
         raise MissingAssetError(f"stimulus file {path} not found: fix its path in the design file")
-    try:
-        import av
-    except ImportError:
-        raise MissingExtraError("av", "track") from None
+    av = require("av", "track")
     try:
         with av.open(str(path)) as container:
             if not container.streams.video:

@@ -23,7 +23,8 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
-from mien.errors import InvalidValueError, MienError, MissingExtraError
+from mien.errors import InvalidValueError, MienError
+from mien.extras import require
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -170,10 +171,7 @@ class Store:
     """
 
     def __init__(self, url: str, retry_s: float = 0.05, busy_timeout_s: float = 5.0) -> None:
-        try:
-            import sqlalchemy as sa
-        except ImportError:
-            raise MissingExtraError("sqlalchemy", "study") from None
+        sa = require("sqlalchemy", "study")
         self.url = url
         self.retry_s = retry_s
         self._sa = sa
@@ -195,10 +193,7 @@ class Store:
                 cursor.close()
 
         else:
-            try:
-                from sqlalchemy.dialects.postgresql import insert
-            except ImportError:
-                raise MissingExtraError("psycopg", "study") from None
+            insert = require("sqlalchemy.dialects.postgresql", "study").insert
             engine = sa.create_engine(
                 url,
                 pool_size=10,

@@ -23,7 +23,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from mien.errors import InvalidValueError, MissingExtraError
+from mien.errors import InvalidValueError
+from mien.extras import require
 from mien.facs.arkit import ARKIT_INDEX, ARKIT_NAMES
 from mien.paths import require_asset
 
@@ -75,11 +76,7 @@ def head_pose_deg(matrix: np.ndarray) -> np.ndarray:
 
 
 def _vision() -> Any:
-    try:
-        from mediapipe.tasks.python import vision
-    except ImportError:
-        raise MissingExtraError("mediapipe", "track") from None
-    return vision
+    return require("mediapipe.tasks.python.vision", "track")
 
 
 class Landmarker:

@@ -20,6 +20,7 @@ from typing import Any, TypeVar
 import numpy as np
 
 from mien.errors import InvalidValueError, MissingExtraError
+from mien.extras import available
 
 __all__ = ["VideoInfo", "iter_frames", "prefetch", "probe"]
 
@@ -74,11 +75,7 @@ def _open_av(file: Path) -> tuple[Any, Any]:
 
 
 def _has_av() -> bool:
-    try:
-        import av  # noqa: F401
-    except ImportError:
-        return False
-    return True
+    return available("av")
 
 
 def probe(path: str | os.PathLike[str]) -> VideoInfo:
@@ -162,10 +159,10 @@ def _iter_av(file: Path) -> Iterator[tuple[float, np.ndarray]]:
 
 
 def _open_cv(file: Path) -> Any:
-    try:
-        import cv2
-    except ImportError:
-        raise MissingExtraError("av (PyAV) or opencv-python", "track") from None
+    if not available("cv2"):  # no extra brings OpenCV: name both ways to read a video
+        raise MissingExtraError("av (PyAV) or opencv-python", "track")
+    import cv2
+
     capture = cv2.VideoCapture(str(file))
     if not capture.isOpened():
         raise _unreadable(file, "OpenCV cannot open it")
