@@ -51,13 +51,11 @@ def run(args: argparse.Namespace) -> int:
             raise InvalidValueError(option, port, "a port 0..65535 (0 = any free port)")
     if args.udp_port and args.udp_port == args.http_port:
         raise InvalidValueError("--http-port", args.http_port, "a port other than --udp-port")
-    try:
-        from mien.server.app import LiveServer, ServeConfig, is_loopback
-        from mien.server.registry import CharacterSpec
-    except ImportError as exc:
-        from mien.errors import MissingExtraError
+    from mien.extras import require
 
-        raise MissingExtraError(exc.name or "fastapi", "serve") from None
+    require("mien.server.app", "serve")  # a missing fastapi/uvicorn names mien[serve]
+    from mien.server.app import LiveServer, ServeConfig, is_loopback
+    from mien.server.registry import CharacterSpec
     ids = args.character or ["default"]
     specs = tuple(
         CharacterSpec(character_id, head=args.head, identity=args.identity, seed=args.seed + i, idle=not args.no_idle)
