@@ -36,10 +36,12 @@ EXTRA_OF: dict[str, str] = {
     "mediapipe": "track",
     "av": "track",
     "kmedoids": "laughter",
-    "scipy": "laughter",
+    "scipy": "au",
     "dask": "distributed",
     "distributed": "distributed",
     "ai_edge_litert": "validate",
+    "meshopt": "heads",
+    "DracoPy": "heads",
     "fastapi": "serve",
     "uvicorn": "serve",
     "orjson": "serve",
@@ -50,7 +52,8 @@ EXTRA_OF: dict[str, str] = {
     "pingouin": "study",
     "statsmodels": "study",
 }
-"""Top-level module -> the smallest extra of ``pyproject.toml`` that installs it."""
+"""Top-level module -> the extra of ``pyproject.toml`` named when it is missing: one that installs it, the
+smallest where several do, except ``PIL``, named for rendering (``heads`` installs it too, for textures)."""
 
 
 def require(module: str, extra: str | None = None) -> types.ModuleType:
