@@ -9,7 +9,7 @@ from mien.render.camera import CAMERA_PRESETS, STUDY_FOV_DEG, VIEWS, Camera, Vie
 from mien.render.clip_render import render_clip, render_still
 from mien.render.contact_sheet import contact_sheet
 from mien.render.offscreen import EGLUnavailableError, OffscreenRenderer, vertex_normals
-from mien.render.video import VideoInfo, read_video_info, write_mp4, write_png
+from mien.render.video import EncodedVideo, read_video_info, write_mp4, write_png
 
 __all__ = [
     "CAMERA_PRESETS",
@@ -17,8 +17,8 @@ __all__ = [
     "VIEWS",
     "Camera",
     "EGLUnavailableError",
+    "EncodedVideo",
     "OffscreenRenderer",
-    "VideoInfo",
     "View",
     "camera_from_options",
     "contact_sheet",

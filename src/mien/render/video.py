@@ -27,7 +27,7 @@ from mien.extras import require
 from mien.fileio.streams import atomic_path, temporary_path
 from mien.progress import progress as progress_bar
 
-__all__ = ["Mp4Writer", "VideoInfo", "read_video_info", "write_mp4", "write_png"]
+__all__ = ["EncodedVideo", "Mp4Writer", "read_video_info", "write_mp4", "write_png"]
 
 X264_PRESETS = (
     "ultrafast",
@@ -246,8 +246,9 @@ def write_png(image: np.ndarray, path: str | os.PathLike[str], compress_level: i
 
 
 @dataclass(frozen=True)
-class VideoInfo:
-    """Facts about a video file's first video stream."""
+class EncodedVideo:
+    """Facts about an encoded video file's first video stream, its frames counted (what :func:`read_video_info`
+    checks after writing); :class:`mien.tracking.video.VideoHeader` is what a video's container declares."""
 
     n_frames: int
     """Number of frames."""
@@ -268,7 +269,7 @@ class VideoInfo:
         return self.n_frames / self.fps
 
 
-def read_video_info(path: str | os.PathLike[str]) -> VideoInfo:
+def read_video_info(path: str | os.PathLike[str]) -> EncodedVideo:
     """Frame count, fps, size, codec and pixel format of the video at ``path`` (PyAV; counts packets)."""
     av = require("av", "track")
     with av.open(str(path)) as container:
@@ -276,7 +277,7 @@ def read_video_info(path: str | os.PathLike[str]) -> VideoInfo:
         n_frames = sum(1 for packet in container.demux(stream) if packet.size)
         context = stream.codec_context
         rate = stream.average_rate or stream.base_rate
-        return VideoInfo(
+        return EncodedVideo(
             n_frames=n_frames,
             fps=float(rate) if rate else 0.0,
             width=int(context.width),

@@ -8,7 +8,7 @@ Importing this package needs numpy only.
 from mien.tracking.ibug68 import IBUG68_NAMES, ibug68, ibug68_indices
 from mien.tracking.landmarker import MIN_CONFIDENCE, FrameResult, Landmarker, head_pose_deg
 from mien.tracking.track import MAX_GAP_S, Track, apply_gaps, fill_gaps, load_track, track_video
-from mien.tracking.video import VideoInfo, iter_frames, probe
+from mien.tracking.video import VideoHeader, iter_frames, probe
 
 __all__ = [
     "IBUG68_NAMES",
@@ -17,7 +17,7 @@ __all__ = [
     "FrameResult",
     "Landmarker",
     "Track",
-    "VideoInfo",
+    "VideoHeader",
     "apply_gaps",
     "fill_gaps",
     "head_pose_deg",

@@ -35,7 +35,7 @@ from mien.fileio.streams import write_text
 from mien.paths import cache_dir, require_asset
 from mien.progress import progress
 from mien.tracking.landmarker import MIN_CONFIDENCE, N_LANDMARKS, head_pose_deg
-from mien.tracking.video import VideoInfo, probe
+from mien.tracking.video import VideoHeader, probe
 
 __all__ = [
     "MAX_GAP_S",
@@ -346,7 +346,7 @@ def track_video(
     return apply_gaps(raw, max_gap_s)
 
 
-def _track_frames(path: Path, model: Path, min_confidence: float, info: VideoInfo, show_progress: bool) -> Track:
+def _track_frames(path: Path, model: Path, min_confidence: float, info: VideoHeader, show_progress: bool) -> Track:
     from mien.tracking.landmarker import Landmarker
     from mien.tracking.video import iter_frames, prefetch
 

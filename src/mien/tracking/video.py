@@ -22,14 +22,15 @@ import numpy as np
 from mien.errors import InvalidValueError, MissingExtraError
 from mien.extras import available
 
-__all__ = ["VideoInfo", "iter_frames", "prefetch", "probe"]
+__all__ = ["VideoHeader", "iter_frames", "prefetch", "probe"]
 
 T = TypeVar("T")
 
 
 @dataclass(frozen=True)
-class VideoInfo:
-    """What a video holds, as read from its container."""
+class VideoHeader:
+    """What a video's container declares (the frame count is an estimate), read before tracking it;
+    :class:`mien.render.video.EncodedVideo` is a written video with its frames counted."""
 
     path: Path
     """The file."""
@@ -78,7 +79,7 @@ def _has_av() -> bool:
     return available("av")
 
 
-def probe(path: str | os.PathLike[str]) -> VideoInfo:
+def probe(path: str | os.PathLike[str]) -> VideoHeader:
     """Open ``path`` and read its frame rate, frame count and size (decodes nothing).
 
     Raises :class:`InvalidValueError` (field ``video``) when the file is missing or not a readable video.
@@ -88,14 +89,14 @@ def probe(path: str | os.PathLike[str]) -> VideoInfo:
         container, stream = _open_av(file)
         try:
             rate = stream.average_rate or stream.guessed_rate or Fraction(30)
-            return VideoInfo(file, float(rate), int(stream.frames or 0), stream.width, stream.height)
+            return VideoHeader(file, float(rate), int(stream.frames or 0), stream.width, stream.height)
         finally:
             container.close()
     capture = _open_cv(file)
     try:
         import cv2
 
-        return VideoInfo(
+        return VideoHeader(
             file,
             float(capture.get(cv2.CAP_PROP_FPS) or 30.0),
             int(capture.get(cv2.CAP_PROP_FRAME_COUNT) or 0),
