@@ -31,7 +31,7 @@ from mien.render.offscreen import (
     vertex_normals,
 )
 from mien.render.shaders import LIGHTS
-from mien.render.textured_shaders import ALPHA_MODE_IDS, TEXTURED_VERTEX_SHADER, fragment_shader
+from mien.render.textured_shaders import ALPHA_MODE_IDS, fragment_shader, vertex_shader
 
 __all__ = ["TexturedRenderer"]
 
@@ -65,9 +65,10 @@ class TexturedRenderer:
 
     ``camera`` looks at the mesh in its own frame and unit; ``background`` 8-bit sRGB; ``samples``
     multisample anti-aliasing (0, 2, 4 or 8; capped at what the driver offers); ``weld_normals`` shares one
-    normal between vertices at the same rest position (UV seams); ``backend`` the moderngl standalone backend
-    (``"egl"``; None = the platform default, see :mod:`mien.render.offscreen`). Use as a context manager (or
-    call :meth:`close`). Not thread-safe: render from one thread.
+    normal between vertices at the same rest position (UV seams); ``per_pixel`` evaluates the diffuse light
+    per pixel instead of per vertex (slower on a CPU; see :mod:`mien.render.textured_shaders`); ``backend``
+    the moderngl standalone backend (``"egl"``; None = the platform default, see :mod:`mien.render.offscreen`).
+    Use as a context manager (or call :meth:`close`). Not thread-safe: render from one thread.
     """
 
     def __init__(
@@ -79,6 +80,7 @@ class TexturedRenderer:
         background: tuple[int, int, int] = DEFAULT_BACKGROUND,
         samples: int = 4,
         weld_normals: bool = True,
+        per_pixel: bool = False,
         backend: str | None = "egl",
     ) -> None:
         self.width, self.height = _check_size(width, height)
@@ -115,7 +117,7 @@ class TexturedRenderer:
             # Two programs: the alpha test's discard (MASK parts only) would cost the others early depth tests.
             self._programs = {
                 alpha_test: ctx.program(
-                    vertex_shader=TEXTURED_VERTEX_SHADER, fragment_shader=fragment_shader(alpha_test)
+                    vertex_shader=vertex_shader(per_pixel), fragment_shader=fragment_shader(alpha_test, per_pixel)
                 )
                 for alpha_test in (False, True)
             }
