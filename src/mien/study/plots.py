@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import itertools
 import os
-from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -177,10 +176,9 @@ def plot_interactions(analysis: StudyAnalysis, measure: str, path: str | os.Path
 
 
 def _paper_mascaro() -> Any:
-    import pandas as pd
+    from mien.study.quality import table_frame
 
-    with resources.files("mien.study").joinpath("data/mascaro_fig10.csv").open("r", encoding="utf-8") as handle:
-        return pd.read_csv(handle, comment="#")
+    return table_frame("mien.study", "data/mascaro_fig10.csv")
 
 
 def plot_mascaro(analysis: StudyAnalysis, path: str | os.PathLike[str]) -> Path:

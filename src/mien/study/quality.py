@@ -21,12 +21,12 @@ The paper's own figures are in ``mien/affect/data/broekens_table4.csv`` (:func:`
 from __future__ import annotations
 
 from collections.abc import Sequence
-from importlib import resources
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from mien.errors import UnknownNameError
+from mien.fileio.tables import read_table
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -37,6 +37,7 @@ __all__ = [
     "label_question",
     "paper_table4",
     "quality_table",
+    "table_frame",
 ]
 
 LABEL_PREFIX = "label:"
@@ -104,7 +105,17 @@ def paper_table4() -> pd.DataFrame:
     >>> paper_table4().set_index("expression").loc["joy", "quality"]
     np.float64(0.806)
     """
+    return table_frame("mien.affect", "data/broekens_table4.csv")
+
+
+def table_frame(package: str, name: str) -> pd.DataFrame:
+    """A data table of mien (:func:`mien.fileio.tables.read_table`) as a DataFrame, numeric columns as numbers."""
     import pandas as pd
 
-    with resources.files("mien.affect").joinpath("data/broekens_table4.csv").open("r", encoding="utf-8") as handle:
-        return pd.read_csv(handle, comment="#")
+    frame = pd.DataFrame(read_table(package, name))
+    for column in frame.columns:
+        try:
+            frame[column] = pd.to_numeric(frame[column])
+        except ValueError:  # a text column stays text
+            pass
+    return frame
