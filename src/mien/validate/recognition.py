@@ -39,6 +39,7 @@ import numpy as np
 from mien.character import Character
 from mien.errors import InvalidValueError, UnknownNameError
 from mien.extras import require
+from mien.fileio.streams import atomic_path
 from mien.progress import progress as progress_bar
 from mien.render.camera import VIEWS
 from mien.render.contact_sheet import contact_sheet
@@ -245,13 +246,11 @@ def write_recognition(result: RecognitionResult, out_dir: str | Path) -> dict[st
             columns=max(columns, 2) * 3 + 1,
             font_size=12,
         )
-        partial = out / f".{name}.partial.png"
-        write_png(sheet, partial)
-        written[name] = partial.replace(out / name)
+        written[name] = write_png(sheet, out / name)  # atomic
     for name, draw in (("confusion.png", plot_confusion), ("quality.png", plot_quality)):
-        partial = out / f".{name}.partial.png"
-        draw(result, partial)
-        written[name] = partial.replace(out / name)
+        with atomic_path(out / name) as temporary:
+            draw(result, temporary)
+        written[name] = out / name
     written["recognition.json"] = result.write_json(out / "recognition.json")
     return written
 

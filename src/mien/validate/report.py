@@ -24,6 +24,7 @@ import numpy as np
 from mien.facs.catalogue import OPENFACS_AUS
 from mien.facs.prototypes import PROTOTYPES_VERSION
 from mien.fileio.hashing import file_sha256
+from mien.fileio.streams import write_text
 from mien.htmlpage import STYLE as _STYLE
 from mien.htmlpage import img as _img
 from mien.htmlpage import library_versions
@@ -302,6 +303,5 @@ def build_report(heads: Sequence[tuple[str, str]], options: ValidateOptions) -> 
         "emotion_model": str(asset_path("emotion_model", options.emotion_model_path) or ""),
     }
     page = render_html(sections, environment(models), timings, heads)
-    partial = out / ".report.html.partial"
-    partial.write_text(page, encoding="utf-8")
-    return partial.replace(out / "report.html")
+    write_text(page, out / "report.html")  # atomic
+    return out / "report.html"
