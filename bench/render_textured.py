@@ -6,8 +6,9 @@ baseline, measured in the same run: a *bare draw* of the same meshes and texture
 (moderngl on the same EGL / llvmpipe), a minimal shader (texture times one Lambert light), the same
 multisampling and read-back, positions and precomputed normals uploaded each frame, one draw call per material,
 no mien code. Both get the same per-frame positions (the head's first morph targets swinging), so the ratio is
-mien's overhead per frame. Repeats are interleaved (mien, bare, mien, bare, ...); it prints the median ms per
-frame of each, their spread (min..max over repeats) and the ratio of medians (target: at most 1.2x).
+mien's overhead per frame. Frames are interleaved (mien, bare, mien, bare, ...); it prints, in wall-clock and
+in process CPU time (llvmpipe's threads included: steadier on a shared machine), the median ms per frame of
+each, the ratio of the medians (target: at most 1.2x) and the median and quartiles of the paired frame ratios.
 
 With ``--ict`` (default on when ICT-FaceKit is found) it also prints the untextured renderer
 (:func:`mien.render.clip_render.make_renderer` on ICT-FaceKit) against a bare draw of the same mesh.
@@ -123,26 +124,27 @@ class BareDraw:
         return self.out
 
 
-def time_per_frame_ms(render: Callable[[np.ndarray], Any], frames: list[np.ndarray]) -> float:
-    start = time.perf_counter()
-    for vertices in frames:
-        render(vertices)
-    return (time.perf_counter() - start) / len(frames) * 1000.0
-
-
 def compare(label: str, mien: Callable[[np.ndarray], Any], bare: Callable[[np.ndarray], Any],
             frames: list[np.ndarray], repeats: int) -> None:  # fmt: skip
+    """Interleaved frame by frame (mien, bare, mien, bare, ...) so that load from other processes hits both."""
     mien(frames[0]), bare(frames[0])  # warm up: shader compile, first allocations
-    mien_ms, bare_ms = [], []
+    wall: dict[str, list[float]] = {"mien": [], "bare": []}
+    cpu: dict[str, list[float]] = {"mien": [], "bare": []}
     for _ in range(repeats):
-        mien_ms.append(time_per_frame_ms(mien, frames))
-        bare_ms.append(time_per_frame_ms(bare, frames))
-    ratios = [m / b for m, b in zip(mien_ms, bare_ms, strict=True)]
-    m, b = statistics.median(mien_ms), statistics.median(bare_ms)
-    print(f"{label}")
-    print(f"  mien       {m:8.1f} ms/frame  (spread {min(mien_ms):.1f}..{max(mien_ms):.1f}, {repeats} repeats)")
-    print(f"  bare draw  {b:8.1f} ms/frame  (spread {min(bare_ms):.1f}..{max(bare_ms):.1f})")
-    print(f"  ratio mien / bare: {m / b:.2f}x (per-repeat ratios {min(ratios):.2f}..{max(ratios):.2f})")
+        for vertices in frames:
+            for name, render in (("mien", mien), ("bare", bare)):
+                start_wall, start_cpu = time.perf_counter(), time.process_time()
+                render(vertices)
+                wall[name].append((time.perf_counter() - start_wall) * 1000.0)
+                cpu[name].append((time.process_time() - start_cpu) * 1000.0)
+    print(label)
+    for what, samples in (("wall", wall), ("CPU (all threads of this process)", cpu)):
+        m, b = statistics.median(samples["mien"]), statistics.median(samples["bare"])
+        ratios = [x / y for x, y in zip(samples["mien"], samples["bare"], strict=True)]
+        q = statistics.quantiles(ratios, n=4)
+        print(f"  {what}: mien {m:.1f} ms/frame, bare draw {b:.1f} ms/frame (medians of {len(ratios)} frames)")
+        print(f"    ratio mien / bare: {m / b:.2f}x; paired frame ratios median {statistics.median(ratios):.2f}, "
+              f"quartiles {q[0]:.2f}..{q[2]:.2f}")  # fmt: skip
 
 
 def morph_frames(scene: Any, mesh: TexturedMesh, n_frames: int) -> list[np.ndarray]:

@@ -98,6 +98,8 @@ class TexturedRenderer:
         self._triangles = np.ascontiguousarray(triangles, np.int32)
         if weld_normals:
             self._weld_first, self._weld_inverse, self._weld_triangles = _weld(mesh.positions, self._triangles)
+            self._welded = np.empty((len(self._weld_first), 3), np.float32)
+            self._welded_normals = np.empty_like(self._welded)
         else:
             self._weld_first = self._weld_inverse = None  # type: ignore[assignment]
             self._weld_triangles = self._triangles
@@ -243,8 +245,9 @@ class TexturedRenderer:
         elif out.shape != (self.height, self.width, 3) or out.dtype != np.uint8 or not out.flags.c_contiguous:
             raise InvalidValueError("out", out.shape, f"a C-contiguous ({self.height}, {self.width}, 3) uint8 array")
         if self._weld_first is not None:
-            welded = vertex_normals(vertices[self._weld_first], self._weld_triangles)
-            np.take(welded, self._weld_inverse, axis=0, out=self._normals)
+            np.take(vertices, self._weld_first, axis=0, out=self._welded)
+            vertex_normals(self._welded, self._weld_triangles, out=self._welded_normals)
+            np.take(self._welded_normals, self._weld_inverse, axis=0, out=self._normals)
         else:
             vertex_normals(vertices, self._triangles, out=self._normals)
         ctx = self._ctx

@@ -11,8 +11,8 @@ Double-sided parts light their back faces with the flipped normal.
 
 Speed on a CPU rasteriser (llvmpipe pays for every instruction of every pixel): by default the diffuse
 light (key, fill, rim, ambient: smooth in the normal) is evaluated per vertex, for the front and the back
-side, and interpolated, as is the key light's half vector; the specular highlight (the interpolated half
-vector renormalised against the per-pixel normal), the texture and the encoding stay per pixel. On a head's
+side, and interpolated, as are the key light's ``n . h`` and ``n . l``; the specular power
+``0.12 (n . h) ** 36`` of the interpolated ``n . h``, the texture and the encoding stay per pixel. On a head's
 dense mesh this is the per-pixel image to within a level or two (``per_pixel=True`` evaluates it all per
 pixel, exactly as :mod:`mien.render.shaders`). The alpha test's ``discard`` is compiled only into the
 program of MASK parts (the others keep early depth testing); integer powers are products, and the gamma 2.2
@@ -64,7 +64,7 @@ out vec2 v_uv;
 #ifdef PER_VERTEX_DIFFUSE
 out vec3 v_front_light;
 out vec3 v_back_light;
-out vec3 v_half_vector;
+out vec2 v_key_dots;
 #endif
 void main() {
     vec4 world = vec4(in_position, 1.0);
@@ -77,7 +77,8 @@ void main() {
     vec3 to_eye = normalize(-v_eye_position);
     v_front_light = diffuse(n, to_eye);
     v_back_light = diffuse(-n, to_eye);
-    v_half_vector = normalize(u_key_direction + to_eye);
+    // n . h and n . key for the front side (the back side's are their negatives).
+    v_key_dots = vec2(dot(n, normalize(u_key_direction + to_eye)), dot(n, u_key_direction));
 #endif
 }
 """
@@ -93,7 +94,7 @@ in vec2 v_uv;
 #ifdef PER_VERTEX_DIFFUSE
 in vec3 v_front_light;
 in vec3 v_back_light;
-in vec3 v_half_vector;
+in vec2 v_key_dots;
 #endif
 out vec4 f_color;
 void main() {
@@ -105,10 +106,8 @@ void main() {
     float side = gl_FrontFacing ? 1.0 : -1.0;
 #ifdef PER_VERTEX_DIFFUSE
     vec3 light = gl_FrontFacing ? v_front_light : v_back_light;
-    // n . h of the unit vectors, with one inverse square root for both lengths.
-    float n_dot_h = side * dot(v_normal, v_half_vector)
-        * inversesqrt(dot(v_normal, v_normal) * dot(v_half_vector, v_half_vector));
-    float n_dot_key = side * dot(v_normal, u_key_direction);  // only its sign is used
+    float n_dot_h = side * v_key_dots.x;
+    float n_dot_key = side * v_key_dots.y;  // only its sign is used
 #else
     vec3 n = normalize(v_normal) * side;
     vec3 to_eye = normalize(-v_eye_position);
