@@ -12,6 +12,7 @@ import os
 from collections.abc import Callable, Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
+from typing import Protocol
 
 import numpy as np
 
@@ -20,16 +21,53 @@ from mien.progress import progress as progress_bar
 from mien.render.appearance import rig_vertex_colors, visible_faces
 from mien.render.camera import Camera
 from mien.render.face_paint import face_paint
+from mien.render.materials import textured_mesh_from_rig
 from mien.render.offscreen import DEFAULT_BACKGROUND, OffscreenRenderer
+from mien.render.textured import TexturedRenderer
 from mien.render.video import write_mp4, write_png
 from mien.rig.deform import Deformer
 from mien.rig.model import Rig
 from mien.rig.pose import apply_pose
 
-__all__ = ["POSE_COLUMNS", "iter_frames", "make_renderer", "render_clip", "render_still"]
+__all__ = ["POSE_COLUMNS", "FrameRenderer", "RigTexturedRenderer", "iter_frames", "make_renderer", "render_clip",
+           "render_still"]
 
 POSE_COLUMNS = ("head_yaw_deg", "head_pitch_deg", "head_roll_deg", "gaze_yaw_deg", "gaze_pitch_deg")
 """Columns of a ``poses`` array, degrees (signs as in the face frame: yaw > 0 to the character's left)."""
+
+
+class FrameRenderer(Protocol):
+    """Draws a rig's deformed vertices ((n_vertices, 3) metres) into (height, width, 3) uint8 images."""
+
+    def render(self, vertices: np.ndarray, out: np.ndarray | None = None) -> np.ndarray: ...
+
+    def close(self) -> None: ...
+
+    def __enter__(self) -> FrameRenderer: ...
+
+    def __exit__(self, *exc_info: object) -> None: ...
+
+
+class RigTexturedRenderer:
+    """A head file's textured parts drawn from the rig's deformed vertices (:class:`TexturedRenderer` inside)."""
+
+    def __init__(self, textured: TexturedRenderer, gather: np.ndarray) -> None:
+        self.textured = textured
+        self.gather = gather
+        self._positions = np.empty((len(gather), 3), np.float32)
+
+    def render(self, vertices: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        np.take(np.asarray(vertices, np.float32), self.gather, axis=0, out=self._positions)
+        return self.textured.render(self._positions, out)
+
+    def close(self) -> None:
+        self.textured.close()
+
+    def __enter__(self) -> RigTexturedRenderer:
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.close()
 
 
 def _pose_function() -> Callable[..., np.ndarray]:
@@ -70,7 +108,7 @@ def _check_poses(poses: np.ndarray | None, n_frames: int) -> np.ndarray | None:
 def iter_frames(
     rig: Rig,
     weights: np.ndarray,
-    renderer: OffscreenRenderer,
+    renderer: FrameRenderer,
     poses: np.ndarray | None = None,
 ) -> Iterator[np.ndarray]:
     """Yield one new (height, width, 3) uint8 image per row of ``weights`` ((n_frames, n_targets), 0..1).
@@ -95,11 +133,19 @@ def make_renderer(
     size: tuple[int, int] = (512, 512),
     background: tuple[int, int, int] = DEFAULT_BACKGROUND,
     samples: int = 4,
-) -> OffscreenRenderer:
-    """An :class:`OffscreenRenderer` for ``rig``: its visible faces, colours (darkened inside the mouth:
-    :func:`~mien.render.appearance.rig_vertex_colors`) and face paint (brows, lash lines, lips:
-    :func:`~mien.render.face_paint.face_paint`), ``size`` (w, h) pixels."""
+) -> FrameRenderer:
+    """A renderer for ``rig`` at ``size`` (w, h) pixels.
+
+    A head read from a user's file is drawn as the file draws it: its textured parts, alpha modes and sides
+    (:class:`RigTexturedRenderer`). mien's own heads get an :class:`OffscreenRenderer` of their visible faces,
+    colours (darkened inside the mouth: :func:`~mien.render.appearance.rig_vertex_colors`) and face paint
+    (brows, lash lines, lips: :func:`~mien.render.face_paint.face_paint`).
+    """
     width, height = _check_size(size)
+    textured = textured_mesh_from_rig(rig)
+    if textured is not None:
+        mesh, gather = textured
+        return RigTexturedRenderer(TexturedRenderer(mesh, width, height, camera, background, samples), gather)
     paint = face_paint(rig)
     return OffscreenRenderer(
         visible_faces(rig),

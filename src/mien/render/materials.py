@@ -21,6 +21,7 @@ import numpy as np
 
 from mien.errors import InvalidValueError
 from mien.extras import require
+from mien.rig.files.head import FileRig
 
 if TYPE_CHECKING:
     from mien.rig.files.gltf import GltfScene
@@ -33,6 +34,7 @@ __all__ = [
     "TexturedMesh",
     "decode_texture",
     "textured_mesh_from_gltf",
+    "textured_mesh_from_rig",
 ]
 
 
@@ -224,3 +226,43 @@ def textured_mesh_from_gltf(
     if not parts:
         raise InvalidValueError("primitives", list(chosen), f"indices of {scene.path}'s primitives")
     return TexturedMesh(np.concatenate(positions).astype(np.float32), np.concatenate(uvs), tuple(parts))
+
+
+def textured_mesh_from_rig(rig: object) -> tuple[TexturedMesh, np.ndarray] | None:
+    """A head file's drawn parts as a :class:`TexturedMesh` over the rig's vertices, or None for other rigs.
+
+    Returns ``(mesh, gather)``: ``gather`` (k,) int32 picks, for each of the mesh's (unwelded) vertices, its rig
+    vertex, so a deformed rig ``vertices[gather]`` is the mesh at that frame. Textures are decoded once per
+    image; one that cannot be decoded warns (:class:`TextureDecodeWarning`) and its parts keep their factor.
+    """
+    if not isinstance(rig, FileRig) or rig.info is None or not rig.info.materials:
+        return None
+    decoded: dict[int, Material] = {}
+    positions, uvs, parts, gathers = [], [], [], []
+    offset = 0
+    for drawn in rig.info.materials:
+        key = id(drawn.base_color_image)
+        if key not in decoded:
+            texture = None
+            if drawn.base_color_image:
+                try:
+                    texture = decode_texture(drawn.base_color_image, drawn.base_color_mime)
+                except (OSError, ValueError) as exc:
+                    warnings.warn(
+                        f"{rig.info.path}: the texture of {drawn.mesh_name} ({drawn.base_color_mime or 'unknown type'})"
+                        f" cannot be decoded ({exc}); it is drawn in its base-colour factor",
+                        TextureDecodeWarning,
+                        stacklevel=2,
+                    )
+            decoded[key] = Material(
+                drawn.mesh_name, texture, drawn.base_color_factor, AlphaMode(drawn.alpha_mode), drawn.alpha_cutoff,
+                drawn.double_sided,
+            )  # fmt: skip
+        ids = np.asarray(drawn.vertex_ids, np.int32)
+        gathers.append(ids)
+        positions.append(rig.neutral[ids])
+        uvs.append(drawn.uvs if drawn.uvs is not None else np.zeros((len(ids), 2), np.float32))
+        parts.append(Part(drawn.mesh_name, np.asarray(drawn.triangles, np.int32) + offset, decoded[key]))
+        offset += len(ids)
+    mesh = TexturedMesh(np.concatenate(positions), np.concatenate(uvs), tuple(parts))
+    return mesh, np.concatenate(gathers).astype(np.int32)
