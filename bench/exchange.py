@@ -65,8 +65,8 @@ def main() -> None:
     from mien.exchange import glb
     from mien.exchange.key_reduction import reduce_keys
     from mien.facs.arkit import ARKIT_NAMES
+    from mien.heads import load_head
     from mien.rig.face_weights import clip_to_rig
-    from mien.rig.heads import load_head
 
     rig = load_head("default")
     face = character_clip(60.0, 60.0)

@@ -39,10 +39,11 @@ def _point_at_shared() -> None:
 
 
 def per_frame(frames: int, repeats: int) -> None:
+    from mien.heads import load_head
     from mien.render.camera import CAMERA_PRESETS
-    from mien.rig.heads import ict_installed, load_head
-    from mien.validate.face_detector import FaceDetector
+    from mien.rig.heads import ict_installed
     from mien.validate.expressions import EXPRESSIONS
+    from mien.validate.face_detector import FaceDetector
     from mien.validate.recognition import peak_face
     from mien.validate.stimuli import StimulusRenderer
 

@@ -74,8 +74,8 @@ class FrameLog:
 
 def mouth_box(width: int, height: int) -> dict[str, float]:
     """Clip (CSS pixels within the canvas) around the built-in head's mouth in the page's first camera."""
+    from mien.heads import load_head
     from mien.render.camera import CAMERA_PRESETS
-    from mien.rig.heads import load_head
 
     rig = load_head("builtin")
     pixels = CAMERA_PRESETS["frontal-1m"].project(rig.neutral[rig.landmarks[48:68]], width, height)

@@ -125,7 +125,7 @@ def test_bad_input_names_the_file(tmp_path: Path, head) -> None:
 
 
 def test_ict_head_with_paint_texture_passes_the_validator(tmp_path: Path, ict_dir: Path) -> None:
-    from mien.rig.heads import load_head
+    from mien.heads import load_head
 
     rig = load_head("ict")
     path = tmp_path / "ict.glb"

@@ -84,11 +84,11 @@ def rendered_takes(ict_dir: Path, landmarker_path: Path, tmp_path_factory: pytes
     from mien.character import Character
     from mien.errors import MissingExtraError
     from mien.facs.envelope import Envelope
+    from mien.heads import load_head
     from mien.render.camera import CAMERA_PRESETS
     from mien.render.clip_render import render_clip
     from mien.render.offscreen import EGLUnavailableError
     from mien.rig.animate import face_to_rig
-    from mien.rig.heads import load_head
 
     folder = tmp_path_factory.mktemp("takes")
     takes = {}

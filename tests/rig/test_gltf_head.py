@@ -13,8 +13,9 @@ import pytest
 from tests.conftest import shared_root
 
 from mien.facs.arkit import ARKIT_NAMES
+from mien.heads import load_head
 from mien.rig.files import FileRig, HeadFileError, HeadFileWarning, NoMorphTargetsError, load_head_file
-from mien.rig.heads import load_head, parse_head_spec
+from mien.rig.heads import parse_head_spec
 
 pytest.importorskip("meshopt", reason="needs the heads extra: pip install 'mien[heads]'")
 

@@ -13,8 +13,8 @@ from mien.validate.emotion_classifier import FRAMINGS, face_box
 
 def _builtin_landmarks(view: str = "frontal-1m", size: int = 512) -> np.ndarray:
     """The built-in head's 68 landmark vertices projected as in the study's frontal view (pixels)."""
+    from mien.heads import load_head
     from mien.render.camera import VIEWS
-    from mien.rig.heads import load_head
 
     rig = load_head("builtin", "default")
     return VIEWS[view].camera.project(rig.neutral[rig.landmarks], size, size)

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from mien.facs.catalogue import FACE_CHANNELS
+from mien.heads import load_head
 from mien.rig.animate import face_to_rig
 from mien.rig.deform import Deformer
-from mien.rig.heads import load_head
 from mien.rig.mapping import AUMapping
 from mien.validate.landmark_aus import FROM_LANDMARKS, LandmarkAUs, merged_aus
 from mien.validate.recognition import peak_face

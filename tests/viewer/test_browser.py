@@ -169,8 +169,8 @@ def open_page(chromium: object, live: Live) -> Iterator[Opener]:
 
 def _regions(width: int, height: int) -> dict[str, tuple[slice, slice]]:
     """Pixel boxes (rows, columns) of the mouth and brows of the built-in head in the page's first camera."""
+    from mien.heads import load_head
     from mien.render.camera import CAMERA_PRESETS
-    from mien.rig.heads import load_head
 
     rig = load_head("builtin")
     points = rig.neutral[rig.landmarks]

@@ -12,6 +12,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "emote",
     "au",
     "render",
+    "head",
     "assets",
     "track",
     "learn",

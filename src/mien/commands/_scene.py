@@ -55,8 +55,8 @@ def add_scene_options(parser: argparse.ArgumentParser, camera: str = "portrait")
 
 def scene_from_args(args: argparse.Namespace) -> tuple[Rig, Camera, tuple[int, int]]:
     """(rig, camera, size) from the parsed options."""
+    from mien.heads import load_head
     from mien.render.camera import camera_from_options
-    from mien.rig.heads import load_head
 
     size = parse_size(args.size)
     camera = camera_from_options(args.camera, args.yaw, args.pitch, args.distance, args.fov)

@@ -191,7 +191,7 @@ def add_output(
 
 
 def head_spec(text: str) -> tuple[str, str | None]:
-    """argparse type: ``HEAD[:IDENTITY]`` -> ``(head, identity or None)``, as :func:`mien.rig.heads.load_head`
+    """argparse type: ``HEAD[:IDENTITY]`` -> ``(head, identity or None)``, as :func:`mien.heads.load_head`
     takes them; an unknown head is refused. A head file (``face.glb``, ``file:PATH``) stays one spec.
 
     >>> head_spec("builtin:b")

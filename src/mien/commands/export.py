@@ -63,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
             clip = resample(clip, args.fps)
         write = format_module(output_format).write
         if carries_head:
-            from mien.rig.heads import load_head
+            from mien.heads import load_head
 
             rig = load_head(args.head or "default", args.identity)
             write(clip, args.output, rig=rig)

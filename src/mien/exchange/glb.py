@@ -311,7 +311,7 @@ def head_glb_bytes(rig: Rig) -> bytes:
 
 
 def write(clip: Clip, target: TargetT, rig: Rig | None = None) -> TargetT:
-    """Write ``rig`` (default: :func:`mien.rig.heads.load_head`) animated by ``clip`` as GLB to ``target``.
+    """Write ``rig`` (default: :func:`mien.rig.heads.open_head`) animated by ``clip`` as GLB to ``target``.
 
     ``clip``: face channels (AU intensities, pose degrees) or the rig's target names (weights 0..1) plus
     optional pose channels (see :func:`mien.rig.face_weights.clip_to_rig`). Returns ``target``.
@@ -319,9 +319,9 @@ def write(clip: Clip, target: TargetT, rig: Rig | None = None) -> TargetT:
     from mien.rig.face_weights import clip_to_rig
 
     if rig is None:
-        from mien.rig.heads import load_head
+        from mien.rig.heads import open_head
 
-        rig = load_head()
+        rig = open_head()
     if clip.n_frames == 0:
         raise InvalidValueError("clip", "0 frames", "a clip with at least one frame to animate")
     weights, poses = clip_to_rig(clip, rig)

@@ -21,9 +21,9 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass
-from pathlib import Path
 
 import numpy as np
 
@@ -31,6 +31,7 @@ from mien.errors import InvalidValueError, MienError
 from mien.fileio.streams import write_bytes
 from mien.paths import cache_dir
 from mien.render.camera import Camera
+from mien.render.clip_render import FrameRenderer
 from mien.render.offscreen import OffscreenRenderer
 from mien.tracking.ibug68 import ibug68
 from mien.tracking.landmarker import Landmarker
@@ -164,21 +165,6 @@ def _camera_for(points: np.ndarray) -> tuple[Camera, np.ndarray, float]:
     return Camera(distance_m=distance, fov_deg=_FOV_DEG, target=(0.0, 0.0, 0.0), near_m=0.01), centre, scale
 
 
-def _project(camera: Camera, points: np.ndarray, size: int) -> np.ndarray:
-    """(n, 3) pixel x, pixel y (top-left origin) and eye-space depth (> 0 in front) of ``points`` (metres)."""
-    view = camera.view_matrix().astype(np.float64)
-    projection = camera.projection_matrix(1.0).astype(np.float64)
-    homogeneous = np.c_[points, np.ones(len(points))]
-    eye = homogeneous @ view.T
-    clip = eye @ projection.T
-    ndc = clip[:, :2] / clip[:, 3:4]
-    pixels = np.empty((len(points), 3))
-    pixels[:, 0] = (ndc[:, 0] + 1.0) * 0.5 * size
-    pixels[:, 1] = (1.0 - ndc[:, 1]) * 0.5 * size
-    pixels[:, 2] = -eye[:, 2]
-    return pixels
-
-
 def _cast(pixels: np.ndarray, faces: np.ndarray, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """For each (k, 2) target pixel, the nearest triangle covering it: ``(face ids (k,), barycentric (k, 3))``.
 
@@ -216,12 +202,12 @@ def _cast(pixels: np.ndarray, faces: np.ndarray, targets: np.ndarray) -> tuple[n
     return ids, weights
 
 
-RendererFactory = Callable[[Camera, int], OffscreenRenderer]
+RendererFactory = Callable[[Camera, int], FrameRenderer]
 """Makes the renderer of one look: ``(camera, size in pixels) -> OffscreenRenderer`` of the head's faces."""
 
 
 def _bare(faces: np.ndarray) -> RendererFactory:
-    def make(camera: Camera, size: int) -> OffscreenRenderer:
+    def make(camera: Camera, size: int) -> FrameRenderer:
         return OffscreenRenderer(faces, size, size, camera, samples=4, cull_back_faces=False)
 
     return make
@@ -248,7 +234,7 @@ def _look(
     if found is None:
         return None
     targets = found.landmarks[:, :2].astype(np.float64) * _RENDER_PX
-    face_ids, weights = _cast(_project(camera, placed.astype(np.float64), _RENDER_PX), faces, targets)
+    face_ids, weights = _cast(np.c_[camera.project(placed, _RENDER_PX, _RENDER_PX), camera.depth_m(placed)], faces, targets)
     hit = face_ids >= 0
     if hit.sum() < 400:  # most of the face missed: the picture showed something else (or a very open mesh)
         return None
@@ -267,6 +253,23 @@ def _face_box(points: np.ndarray, rotation: np.ndarray, margin: float) -> np.nda
     low, high = viewed.min(axis=0), viewed.max(axis=0)
     pad = margin * (high - low)
     return np.stack([low - pad, high + pad]) @ rotation
+
+
+def _search_regions(vertices: np.ndarray, rotation: np.ndarray, eyes: np.ndarray | None) -> Iterator[np.ndarray]:
+    """Where to look for the face from one direction, most likely first (points to frame, file frame).
+
+    Around the eyes when the loader knows them (a box three eye-distances wide); the whole mesh; then the top
+    quarter of it along the view's up (the head of a standing body seen whole is too small to be found).
+    """
+    if eyes is not None:
+        centre = eyes.mean(axis=0)
+        reach = 1.5 * max(float(np.linalg.norm(eyes[0] - eyes[1])), 1e-9)
+        yield np.stack([centre - reach, centre + reach])
+    yield vertices
+    height = (vertices @ rotation.T)[:, 1]
+    top = height >= height.max() - 0.25 * float(np.ptp(height))
+    if 3 <= top.sum() < len(vertices):
+        yield vertices[top]
 
 
 def _views() -> Iterator[tuple[str, np.ndarray]]:
@@ -299,15 +302,17 @@ def _unit(interocular: float, name: str) -> str:
 def instrument(
     vertices: np.ndarray,
     faces: np.ndarray,
-    landmarker_model: str | Path | None = None,
+    landmarker_model: str | os.PathLike[str] | None = None,
     name: str = "head",
     renderer: RendererFactory | None = None,
+    eyes: np.ndarray | None = None,
 ) -> Instrumentation:
     """Find the face on the mesh ``vertices`` (n, 3) file units, ``faces`` (m, 3) triangles (see module doc).
 
     ``landmarker_model`` is the MediaPipe ``face_landmarker.task`` (None: the configured asset). ``name`` (the
     file's name) goes into errors. ``renderer`` draws the head's own look (textures, face paint); None draws
-    the bare mesh in one skin tone. Raises :class:`FaceNotFoundError` when no direction shows a face, and
+    the bare mesh in one skin tone. ``eyes`` (2, 3), the eye centres when a loader found them (file units),
+    is where the face is looked for first. Raises :class:`FaceNotFoundError` when no direction shows a face, and
     :class:`InvalidValueError` for an empty mesh or a unit that cannot be told.
     """
     vertices = np.asarray(vertices, np.float64)
@@ -319,7 +324,10 @@ def instrument(
     draw = renderer or _bare(faces)
     with Landmarker(landmarker_model, mode="image") as landmarker:
         for view, rotation in _views():
-            first = _look(landmarker, vertices, faces, rotation, vertices, draw)
+            first = None
+            for region in _search_regions(vertices, rotation, eyes):
+                if (first := _look(landmarker, vertices, faces, rotation, region, draw)) is not None:
+                    break
             if first is None:
                 continue
             # Closer looks, framed on the face found (a full body or a head with shoulders showed it small), at a
@@ -370,8 +378,10 @@ def instrument_cached(
     vertices: np.ndarray,
     faces: np.ndarray,
     file_sha256: str,
-    landmarker_model: str | Path | None = None,
+    landmarker_model: str | os.PathLike[str] | None = None,
     name: str = "head",
+    renderer: RendererFactory | None = None,
+    eyes: np.ndarray | None = None,
 ) -> Instrumentation:
     """:func:`instrument`, cached per ``file_sha256`` in ``$MIEN_CACHE_DIR/heads`` (written atomically).
 
@@ -383,6 +393,6 @@ def instrument_cached(
             return Instrumentation.from_json(path.read_text(encoding="utf-8"))
         except InvalidValueError:
             pass
-    found = instrument(vertices, faces, landmarker_model, name)
+    found = instrument(vertices, faces, landmarker_model, name, renderer, eyes)
     write_bytes(found.to_json().encode("utf-8"), path)
     return found

@@ -7,6 +7,8 @@ iBUG-68 landmark vertices found on the face, and the eyes' and neck's pivots (se
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from mien.heads.instrument import Instrumentation
@@ -46,7 +48,8 @@ def eye_centres(found: Instrumentation, regions: dict[str, np.ndarray], vertices
 def place_rig(rig: Rig, found: Instrumentation, name: str | None = None) -> Rig:
     """``rig`` (file units and axes, as loaded) in mien's frame, with the landmarks and pivots of ``found``.
 
-    Target deltas turn and scale with the mesh; regions, colours and shape gains are kept.
+    Target deltas turn and scale with the mesh; regions, colours, shape gains (and a file head's own
+    information) are kept.
     """
     rotation = found.rotation()
     scale = found.metres_per_unit
@@ -64,15 +67,13 @@ def place_rig(rig: Rig, found: Instrumentation, name: str | None = None) -> Rig:
     regions = dict(rig.regions)
     regions.setdefault("head", np.arange(rig.n_vertices, dtype=np.int32))
     down, back = NECK_BELOW_EYES_M
-    return Rig(
+    return replace(
+        rig,
         name=name or rig.name,
         neutral=place(vertices),
-        faces=rig.faces,
         targets=targets,
         landmarks=found.ibug68_vertices,
         regions=regions,
-        vertex_colors=rig.vertex_colors,
         eye_centers=place(centres),
         neck_pivot=np.array([0.0, down, back], np.float32),
-        shape_gains=rig.shape_gains,
     )

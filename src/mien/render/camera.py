@@ -124,6 +124,15 @@ class Camera:
         view[:3, 3] = -view[:3, :3] @ eye
         return view.astype(np.float32)
 
+    def depth_m(self, points: np.ndarray) -> np.ndarray:
+        """(n,) float64 distance in front of the camera (along its view axis), metres, of (n, 3) ``points``.
+
+        >>> Camera(distance_m=2.0).depth_m(np.array([[0.0, -0.03, 0.0]])).tolist()
+        [2.0]
+        """
+        points = np.asarray(points, np.float64).reshape(-1, 3)
+        return -(np.c_[points, np.ones(len(points))] @ self.view_matrix().astype(np.float64)[2])
+
     def projection_matrix(self, aspect: float) -> np.ndarray:
         """(4, 4) float32 OpenGL perspective matrix for an image of ``aspect`` = width / height (> 0)."""
         aspect = _finite("aspect", aspect)

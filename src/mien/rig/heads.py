@@ -22,8 +22,7 @@ from typing import Protocol
 from mien.errors import InvalidValueError, UnknownNameError
 from mien.paths import asset_path
 from mien.rig.builtin_head import BUILTIN_IDENTITIES, builtin_head
-from mien.rig.feature_points import FeaturePointRig
-from mien.rig.fp_correctives import corrective_targets
+from mien.rig.files.head import load_head_file
 from mien.rig.ict_facekit import ict_identity_presets, ict_missing_files, load_ict_facekit
 from mien.rig.model import Rig
 
@@ -36,7 +35,7 @@ __all__ = [
     "IctHeadSource",
     "head_source",
     "ict_installed",
-    "load_head",
+    "open_head",
     "parse_head_spec",
     "resolve_head_name",
 ]
@@ -45,8 +44,10 @@ __all__ = [
 class HeadSource(Protocol):
     """Where heads of one kind come from."""
 
-    name: str
-    """The head's name in specs and manifests (``"builtin"``, ``"ict"``)."""
+    @property
+    def name(self) -> str:
+        """The head's name in specs and manifests (``"builtin"``, ``"ict"``, ``"file"``)."""
+        ...
 
     def available(self) -> bool:
         """True when this head can be loaded here (its assets are installed)."""
@@ -115,8 +116,6 @@ class FileHeadSource:
         return ()
 
     def load(self, identity: str | None) -> Rig:
-        from mien.rig.files import load_head_file
-
         if identity is None:
             raise InvalidValueError("head file", identity, "a path: file:PATH or an existing .glb/.gltf/.vrm or folder")
         return load_head_file(identity)
@@ -165,21 +164,17 @@ def ict_installed() -> bool:
     return HEAD_SOURCES["ict"].available()
 
 
-def load_head(name: str = "default", identity: str | None = None, feature_points: bool = False) -> Rig:
-    """The head ``name`` (a :data:`HEADS` name, a ``HEAD:IDENTITY`` spec, or a head file's path) with ``identity``.
+def open_head(name: str = "default", identity: str | None = None) -> Rig:
+    """The head ``name`` (a :data:`HEADS` name, a ``HEAD:IDENTITY`` spec, or a head file's path) as its source
+    gives it.
 
     ``identity`` is a preset name of that head (None = the head's default; it may also come after a colon in
     ``name``, but not both). Built-in identities: :data:`mien.rig.builtin_head.BUILTIN_IDENTITIES`; ICT
-    identities: :func:`mien.rig.ict_facekit.ict_identity_presets`. With ``feature_points`` the Broekens
-    feature-point rig is compiled onto the head (54 extra targets ``fp_<Feature>_<axis>``) with its
-    skin-detail correctives (``fpc_<shape>``, :mod:`mien.rig.fp_correctives`).
+    identities: :func:`mien.rig.ict_facekit.ict_identity_presets`. A head file comes as read, without
+    landmarks: jobs load heads with :func:`mien.heads.load_head`, which instruments a file head and compiles the
+    feature-point rig.
     """
     head, spec_identity = parse_head_spec(str(name))
     if spec_identity is not None and identity is not None and spec_identity != identity:
         raise InvalidValueError("identity", identity, f"one identity: {name!r} already names {spec_identity!r}")
-    rig = head_source(head).load(identity if identity is not None else spec_identity)
-    if feature_points:
-        fp = FeaturePointRig.build(rig)
-        rig = rig.with_targets(fp.compile())
-        rig = rig.with_targets(corrective_targets(fp, rig))
-    return rig
+    return head_source(head).load(identity if identity is not None else spec_identity)

@@ -27,9 +27,9 @@ from mien.facs.catalogue import FACE_CHANNELS
 from mien.facs.clip import Clip
 from mien.facs.dynamics import time_constant_from_speed
 from mien.facs.idle import IdleSettings
+from mien.heads import load_head
 from mien.laughter.names import LAUGH_TYPES
 from mien.rig.driver import RigDriver
-from mien.rig.heads import load_head
 from mien.server.protocol import AU_CHANNELS, N_AU_CHANNELS, Message, MessageRejected, Rejection, idle_parts
 from mien.server.stats import Counters, RateLimitedLog
 

@@ -120,7 +120,7 @@ class _Scenes:
         self._renderer: Any = None
 
     def rig(self, head: str, identity: str, basis: str) -> Any:
-        from mien.rig.heads import load_head
+        from mien.heads import load_head
 
         key = (head, identity, basis)
         if key not in self._rigs:

@@ -41,11 +41,11 @@ from mien.facs.catalogue import FACE_CHANNELS
 from mien.facs.clip import Clip
 from mien.facs.envelope import Envelope
 from mien.facs.intensity import parse_au
+from mien.heads import load_head
 from mien.paths import require_asset
 from mien.progress import progress as progress_bar
 from mien.render.camera import camera_from_options
 from mien.rig.au_solve import SOLVED_AUS, AUSolver
-from mien.rig.heads import load_head
 from mien.tracking import track_video
 from mien.validate.activation import (
     DEFAULT_LENGTH,
@@ -331,7 +331,7 @@ def run_compare(
     """Compare the human in ``video_path`` with the character: the closed loop, and ``expression`` if given.
 
     expression: an emotion or blend (``"joy"``), or AUs (``"AU6+AU12D"``); None runs only the closed loop.
-    head / identity: see :func:`mien.rig.heads.load_head`. camera: a preset of
+    head / identity: see :func:`mien.heads.load_head`. camera: a preset of
     :data:`mien.render.camera.CAMERA_PRESETS`. size: render (width, height) pixels. length: time samples
     per map. intensity: the expression's intensity (1 = the prototype). envelope: the expression's
     :class:`~mien.facs.envelope.Envelope` (default Broekens' 0.4/0.3/0.3 s stretched to the video's

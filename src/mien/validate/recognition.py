@@ -40,12 +40,12 @@ from mien.character import Character
 from mien.errors import InvalidValueError, UnknownNameError
 from mien.extras import require
 from mien.fileio.streams import atomic_path
+from mien.heads import load_head
 from mien.progress import progress as progress_bar
 from mien.render.camera import VIEWS
 from mien.render.contact_sheet import contact_sheet
 from mien.render.video import write_png
 from mien.rig.au_solve import AUSolver
-from mien.rig.heads import load_head
 from mien.validate.detector import EMOTION_LABELS, Detector
 from mien.validate.emotion_classifier import FRAMINGS, crop_square, face_box
 from mien.validate.expressions import EXPRESSIONS

@@ -66,13 +66,14 @@ from mien.errors import InvalidValueError, MissingAssetError, UnknownNameError
 from mien.extras import require
 from mien.facs.arkit import ARKIT_NAMES
 from mien.facs.catalogue import ACTION_UNITS, FACE_CHANNELS, OPENFACS_AUS, au_channels
+from mien.heads import load_head
 from mien.paths import require_asset
 from mien.progress import progress as progress_bar
 from mien.render.camera import camera_from_options
 from mien.render.contact_sheet import contact_sheet
 from mien.render.video import write_png
 from mien.rig.au_solve import AUSolver
-from mien.rig.heads import HEADS, ict_installed, load_head
+from mien.rig.heads import HEADS, ict_installed
 from mien.validate.face_detector import MediaPipeDetector
 from mien.validate.figures import plot_crosstalk, plot_scatter
 from mien.validate.human_evidence import HumanEvidence, default_human_folder, human_evidence
@@ -504,7 +505,7 @@ def run_rig_fidelity(
 ) -> RigFidelity:
     """Command each AU alone on each head, render, detect, and compare (module docstring).
 
-    heads: ``(head, identity)`` pairs (:func:`mien.rig.heads.load_head`; identity None = the head's default).
+    heads: ``(head, identity)`` pairs (:func:`mien.heads.load_head`; identity None = the head's default).
     aus: AU numbers or names (default the 18 OpenFACS AUs). intensities: commanded levels in (0, 5].
     camera: a :data:`~mien.render.camera.CAMERA_PRESETS` name. size: render (width, height) pixels.
     detector: a :class:`~mien.validate.detector.Detector` giving blendshapes (default MediaPipe in image mode;
