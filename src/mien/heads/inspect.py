@@ -83,7 +83,8 @@ class HeadInspection:
         extent = float(np.ptp(points[:, :2], axis=0).max())
         fov_deg = 22.0
         distance = 0.5 * extent * 1.6 / np.tan(np.radians(fov_deg) / 2.0) + float(points[:, 2].max() - centre[2])
-        camera = Camera(distance_m=distance, fov_deg=fov_deg, target=tuple(float(v) for v in centre), near_m=0.01)
+        target = (float(centre[0]), float(centre[1]), float(centre[2]))
+        camera = Camera(distance_m=distance, fov_deg=fov_deg, target=target, near_m=0.01)
         image = render_still(rig, None, camera, (size_px, size_px))
         pil_image = require("PIL.Image", "render")
         pil_draw = require("PIL.ImageDraw", "render")

@@ -234,7 +234,8 @@ def _look(
     if found is None:
         return None
     targets = found.landmarks[:, :2].astype(np.float64) * _RENDER_PX
-    face_ids, weights = _cast(np.c_[camera.project(placed, _RENDER_PX, _RENDER_PX), camera.depth_m(placed)], faces, targets)
+    pixels = np.c_[camera.project(placed, _RENDER_PX, _RENDER_PX), camera.depth_m(placed)]
+    face_ids, weights = _cast(pixels, faces, targets)
     hit = face_ids >= 0
     if hit.sum() < 400:  # most of the face missed: the picture showed something else (or a very open mesh)
         return None
