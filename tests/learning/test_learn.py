@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -99,13 +100,17 @@ def test_report_folder(first_run: LearnResult) -> None:
     assert "laughter: smileFrown" in table and "ann" in table
 
 
-def test_rerun_resumes_without_recomputing(first_run: LearnResult, corpus: Path, landmarker_path: Path) -> None:
-    checkpoints = sorted((work_folder(first_run.path) / "videos").iterdir())
+def test_rerun_resumes_without_recomputing(
+    first_run: LearnResult, corpus: Path, landmarker_path: Path, tmp_path: Path
+) -> None:
+    # Rerun on a copy of the first run's output and work folder: the module's first run stays as it was written.
+    out = tmp_path / first_run.path.name
+    shutil.copy2(first_run.path, out)
+    shutil.copytree(work_folder(first_run.path), work_folder(out))
+    checkpoints = sorted((work_folder(out) / "videos").iterdir())
     assert len(checkpoints) == 3  # single_face, broken (a rejected input is final), no_face
     stamps = [p.stat().st_mtime_ns for p in checkpoints]
-    again = learn_library(
-        corpus, corpus / "labels.csv", first_run.path, workers=0, model=landmarker_path, show_progress=False
-    )
+    again = learn_library(corpus, corpus / "labels.csv", out, workers=0, model=landmarker_path, show_progress=False)
     assert again.computed == ()
     assert sorted(again.resumed) == ["broken.mp4", "no_face.mp4", "single_face.mp4"]
     assert [p.stat().st_mtime_ns for p in checkpoints] == stamps
