@@ -23,8 +23,7 @@ def parse_heads(specs: list[str] | None) -> list[tuple[str, str]]:
     Installed heads: the built-in head (identities default and b) and, when ICT-FaceKit is installed, its
     identities a and b (the study's two morphologies).
     """
-    from mien.errors import UnknownNameError
-    from mien.rig.heads import ict_installed
+    from mien.rig.heads import ict_installed, parse_head_spec, resolve_head_name
 
     if not specs:
         heads = [("builtin", "default"), ("builtin", "b")]
@@ -32,11 +31,8 @@ def parse_heads(specs: list[str] | None) -> list[tuple[str, str]]:
     out = []
     for spec in specs:
         for item in spec.split(","):
-            head, _, identity = item.strip().partition(":")
-            if head == "default":
-                head = "ict" if ict_installed() else "builtin"
-            if head not in ("ict", "builtin"):
-                raise UnknownNameError("head", head, ("builtin", "ict", "default"))
+            head, identity = parse_head_spec(item.strip())
+            head = resolve_head_name(head)
             out.append((head, identity or ("a" if head == "ict" else "default")))
     return out
 
@@ -48,7 +44,12 @@ def _check_heads(heads: list[tuple[str, str]]) -> None:
     from mien.rig.heads import ict_installed
 
     for head, identity in heads:
-        if head == "ict":
+        if head == "file":
+            from mien.rig.files.head import is_head_file
+
+            if not is_head_file(identity):
+                raise MissingAssetError(f"head file {identity} not found: give a .glb, .gltf, .vrm or OBJ folder")
+        elif head == "ict":
             if not ict_installed():
                 raise MissingAssetError(
                     "head 'ict' is not installed: point MIEN_ICT_FACEKIT (or [assets] ict_facekit in the config "
@@ -77,7 +78,8 @@ def _add_common(parser: argparse.ArgumentParser, default_out: str) -> None:
         action="append",
         type=head_list,
         metavar="HEAD[:IDENTITY]",
-        help="head to validate, repeatable or comma-separated: ict:a, ict:b, builtin:default, builtin:b "
+        help="head to validate, repeatable or comma-separated: ict:a, ict:b, builtin:default, builtin:b, a "
+        "character file (face.glb) "
         "(default: every installed head and identity)",
     )
     add_landmarker(parser, type=input_file)

@@ -16,6 +16,7 @@ import numpy as np
 
 from mien.extras import require
 from mien.fileio.streams import atomic_path
+from mien.heads.amplitude import MAX_GAIN, calibrate_amplitudes
 from mien.heads.instrument import Instrumentation
 from mien.heads.registry import instrument_head
 from mien.render.camera import Camera
@@ -40,6 +41,8 @@ class HeadInspection:
     """The head in mien's frame, with its landmarks."""
     found: Instrumentation | None
     """What instrumenting found (None for mien's own heads, whose landmarks are built in)."""
+    gains: dict[str, float]
+    """Factors put on the head's timid targets (:mod:`mien.heads.amplitude`); empty when none."""
 
     def report(self) -> str:
         """Lines for people: the file's reading, then landmarks and scale."""
@@ -69,6 +72,11 @@ class HeadInspection:
             f"scale: outer eye corners {interocular_mm:.1f} mm apart (adults: about 90), "
             f"nose root to chin {height_mm:.1f} mm"
         )
+        if self.gains:
+            lines.append(
+                f"driven harder, as far as the reference head ({len(self.gains)} targets, at most x{MAX_GAIN}): "
+                + ", ".join(f"{name} x{gain:.2f}" for name, gain in sorted(self.gains.items()))
+            )
         lines.append(
             "eye centres (m, +x the character's left): "
             + ", ".join(f"({', '.join(f'{v:+.4f}' for v in centre)})" for centre in rig.eye_centers)
@@ -117,6 +125,8 @@ def inspect_head(
     """Load the head ``spec`` (see :func:`mien.heads.load_head`) and gather what was found on it."""
     rig = open_head(spec, identity)
     found = None
+    gains: dict[str, float] = {}
     if isinstance(rig, FileRig) and rig.info is not None:
         rig, found = instrument_head(rig, landmarker_model)
-    return HeadInspection(spec, rig, found)
+        rig, gains = calibrate_amplitudes(rig)
+    return HeadInspection(spec, rig, found, gains)

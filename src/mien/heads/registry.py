@@ -18,6 +18,7 @@ import numpy as np
 
 from mien.errors import InvalidValueError
 from mien.fileio.hashing import file_sha256, key_sha256
+from mien.heads.amplitude import calibrate_amplitudes
 from mien.heads.instrument import Instrumentation, instrument_cached
 from mien.heads.placement import place_rig
 from mien.render.camera import Camera
@@ -66,18 +67,23 @@ def load_head(
     identity: str | None = None,
     feature_points: bool = False,
     landmarker_model: str | os.PathLike[str] | None = None,
+    calibrate: bool = True,
 ) -> Rig:
     """The head ``name`` (a named head, ``HEAD:IDENTITY``, or a head file's path) ready for every mien job.
 
     ``identity`` is a preset of a named head (see :func:`mien.rig.heads.open_head`). A head file is
     instrumented on first use (about 5 s; then cached per file hash), which needs MediaPipe
     (``pip install 'mien[track]'``) and its ``face_landmarker.task`` (``landmarker_model`` or the configured
-    asset). With ``feature_points`` the Broekens feature-point rig is compiled onto the head (54 extra targets
-    ``fp_<Feature>_<axis>``) with its skin-detail correctives (``fpc_<shape>``, :mod:`mien.rig.fp_correctives`).
+    asset), and its timid shapes are driven as far as the reference head's (``calibrate``;
+    :mod:`mien.heads.amplitude`). With ``feature_points`` the Broekens feature-point rig is compiled onto the
+    head (54 extra targets ``fp_<Feature>_<axis>``) with its skin-detail correctives (``fpc_<shape>``,
+    :mod:`mien.rig.fp_correctives`).
     """
     rig = open_head(name, identity)
     if isinstance(rig, FileRig) and rig.info is not None:
         rig, _ = instrument_head(rig, landmarker_model)
+        if calibrate:
+            rig, _ = calibrate_amplitudes(rig)
     if feature_points:
         fp = FeaturePointRig.build(rig)
         rig = rig.with_targets(fp.compile())

@@ -17,6 +17,7 @@ True
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Protocol
 
 from mien.errors import InvalidValueError, UnknownNameError
@@ -33,6 +34,7 @@ __all__ = [
     "FileHeadSource",
     "HeadSource",
     "IctHeadSource",
+    "head_label",
     "head_source",
     "ict_installed",
     "open_head",
@@ -140,9 +142,22 @@ def parse_head_spec(spec: str) -> tuple[str, str | None]:
     if is_head_file(spec):
         return "file", spec
     name, _, identity = spec.strip().partition(":")
+    if name == "file":
+        return "file", identity or None
     if name not in HEADS:
         raise UnknownNameError("head", name, HEADS)
     return name, identity or None
+
+
+def head_label(head: str, identity: str | None) -> str:
+    """A short name of a head for reports and file names: ``ict:a``, ``builtin``, a head file's name.
+
+    >>> head_label("file", "/data/avatars/White_F_1_Casual.glb"), head_label("ict", "a")
+    ('White_F_1_Casual.glb', 'ict:a')
+    """
+    if head == "file" and identity:
+        return Path(identity).name
+    return head if identity is None else f"{head}:{identity}"
 
 
 def resolve_head_name(name: str) -> str:

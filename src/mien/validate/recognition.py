@@ -46,6 +46,7 @@ from mien.render.camera import VIEWS
 from mien.render.contact_sheet import contact_sheet
 from mien.render.video import write_png
 from mien.rig.au_solve import AUSolver
+from mien.rig.heads import head_label
 from mien.validate.detector import EMOTION_LABELS, Detector
 from mien.validate.emotion_classifier import FRAMINGS, crop_square, face_box
 from mien.validate.expressions import EXPRESSIONS
@@ -238,7 +239,8 @@ def write_recognition(result: RecognitionResult, out_dir: str | Path) -> dict[st
         shown = [i for i in indices if i in result.images]
         if not shown:
             continue
-        name = f"sheet_{head}_{identity}_{basis}_{view}.png"
+        slug = "".join(ch if ch.isalnum() or ch in "-." else "_" for ch in head_label(head, identity))
+        name = f"sheet_{slug}_{basis}_{view}.png"
         columns = 1 + len({result.scores[i].stimulus.intensity for i in shown if result.scores[i].stimulus.intensity})
         sheet = contact_sheet(
             [result.images[i] for i in shown],

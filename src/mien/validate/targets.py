@@ -28,6 +28,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from mien.render.camera import VIEWS
+from mien.rig.heads import head_label
 from mien.validate.expressions import BASICS, EXPRESSIONS, blend_components
 from mien.validate.statistics import wilson_interval
 
@@ -137,7 +138,7 @@ def check_targets(result: Any) -> tuple[TargetCheck, ...]:
     heads = sorted({(s.stimulus.head, s.stimulus.identity) for s in result.scores})
     checks = []
     for target in TARGETS:
-        for name, conditions in [(f"{h}:{i}", {"head": h, "identity": i}) for h, i in heads] + [("all", {})]:
+        for name, conditions in [(head_label(h, i), {"head": h, "identity": i}) for h, i in heads] + [("all", {})]:
             outcomes = target.outcomes(result, **conditions)
             checks.append(TargetCheck(name, target, sum(outcomes), len(outcomes)))
     return tuple(checks)
