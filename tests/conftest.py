@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import os
+import shutil
+import subprocess
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -122,3 +124,55 @@ def postgres_url() -> Iterator[str]:
         pytest.skip("PostgreSQL server binaries not found: apt install postgresql (scripts/install does)")
     with temporary_postgres() as url:
         yield url
+
+
+_BLENDER_SCRIPT = r"""
+import sys
+from pathlib import Path
+import bpy
+import numpy as np
+argv = sys.argv[sys.argv.index("--") + 1 :]
+model, out, names = Path(argv[0]), argv[1], argv[2].split(",")
+def read(path, faces=False):
+    verts, polys = [], []
+    for line in path.read_text().splitlines():
+        if line.startswith("v "):
+            verts.append(line.split()[1:4])
+        elif faces and line.startswith("f "):
+            polys.append([int(t.split("/")[0]) - 1 for t in line.split()[1:]])
+    v = np.array(verts, dtype=np.float64)
+    return np.stack([v[:, 0], -v[:, 2], v[:, 1]], axis=1), polys  # OBJ +Y up -> Blender +Z up
+bpy.ops.wm.read_factory_settings(use_empty=True)
+neutral, polys = read(model / "generic_neutral_mesh.obj", faces=True)
+mesh = bpy.data.meshes.new("ict_head")
+mesh.from_pydata(neutral.tolist(), [], polys)
+mesh.update()
+obj = bpy.data.objects.new("ict_head", mesh)
+bpy.context.scene.collection.objects.link(obj)
+obj.shape_key_add(name="Basis", from_mix=False)
+for name in names:
+    key = obj.shape_key_add(name=name, from_mix=False)
+    key.data.foreach_set("co", read(model / f"{name}.obj")[0].astype(np.float32).ravel())
+bpy.ops.export_scene.gltf(filepath=out, export_format="GLB", export_morph=True, export_morph_normal=False,
+                          export_materials="NONE")
+"""
+
+
+@pytest.fixture(scope="session")
+def ict_glb(ict_dir: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """ICT-FaceKit's neutral and expression shapes as shape keys, written by Blender's own glTF exporter."""
+    blender = shutil.which("blender")
+    if blender is None:
+        pytest.skip("Blender not installed (apt-get install blender): it writes the ICT-FaceKit .glb")
+    from mien.rig.conventions import load_convention
+
+    names = [*sorted(load_convention("ict").source_names), "cheekRaiser_L", "cheekRaiser_R"]
+    folder = tmp_path_factory.mktemp("ict-glb")
+    script, out = folder / "export.py", folder / "ict.glb"
+    script.write_text(_BLENDER_SCRIPT)
+    args = [blender, "-b", "--factory-startup", "--python", str(script), "--",
+            str(ict_dir / "FaceXModel"), str(out), ",".join(names)]  # fmt: skip
+    result = subprocess.run(args, capture_output=True, text=True, timeout=300, check=False)
+    if not out.is_file():
+        pytest.fail(f"Blender did not write {out}: {result.stdout[-2000:]} {result.stderr[-2000:]}")
+    return out

@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import shutil
-import subprocess
 import warnings
 from pathlib import Path
 
@@ -13,9 +11,8 @@ import pytest
 from tests.conftest import shared_root
 
 from mien.facs.arkit import ARKIT_NAMES
-from mien.heads import load_head
 from mien.rig.files import FileRig, HeadFileError, HeadFileWarning, NoMorphTargetsError, load_head_file
-from mien.rig.heads import parse_head_spec
+from mien.rig.heads import open_head, parse_head_spec
 
 pytest.importorskip("meshopt", reason="needs the heads extra: pip install 'mien[heads]'")
 
@@ -140,7 +137,7 @@ def test_a_file_path_is_a_head_spec(tmp_path: Path) -> None:
     assert parse_head_spec(f"file:{path}") == ("file", str(path))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", HeadFileWarning)
-        rig = load_head(str(path))
+        rig = open_head(str(path))
     assert rig.target_names == ("eyeBlinkLeft", "jawOpen")
 
 
@@ -251,7 +248,7 @@ def _valid() -> list[Path]:
 
 def test_valid_avatars_load_in_mien_frame() -> None:
     for path in _valid():
-        rig = load_head(str(path))
+        rig = open_head(str(path))
         assert isinstance(rig, FileRig) and rig.info is not None, path.name
         info = rig.info
         assert info.names.convention == "rocketbox" and info.eyes.startswith("eye meshes h_L_eye, h_R_eye")
@@ -278,58 +275,7 @@ def test_valid_avatars_load_in_mien_frame() -> None:
         assert len(skin.vertex_ids) == len(skin.uvs) and skin.vertex_ids.max() < rig.n_vertices
 
 
-# --- ICT-FaceKit through Blender's glTF exporter -------------------------------------------------------------
-
-_BLENDER_SCRIPT = r"""
-import sys
-from pathlib import Path
-import bpy
-import numpy as np
-argv = sys.argv[sys.argv.index("--") + 1 :]
-model, out, names = Path(argv[0]), argv[1], argv[2].split(",")
-def read(path, faces=False):
-    verts, polys = [], []
-    for line in path.read_text().splitlines():
-        if line.startswith("v "):
-            verts.append(line.split()[1:4])
-        elif faces and line.startswith("f "):
-            polys.append([int(t.split("/")[0]) - 1 for t in line.split()[1:]])
-    v = np.array(verts, dtype=np.float64)
-    return np.stack([v[:, 0], -v[:, 2], v[:, 1]], axis=1), polys  # OBJ +Y up -> Blender +Z up
-bpy.ops.wm.read_factory_settings(use_empty=True)
-neutral, polys = read(model / "generic_neutral_mesh.obj", faces=True)
-mesh = bpy.data.meshes.new("ict_head")
-mesh.from_pydata(neutral.tolist(), [], polys)
-mesh.update()
-obj = bpy.data.objects.new("ict_head", mesh)
-bpy.context.scene.collection.objects.link(obj)
-obj.shape_key_add(name="Basis", from_mix=False)
-for name in names:
-    key = obj.shape_key_add(name=name, from_mix=False)
-    key.data.foreach_set("co", read(model / f"{name}.obj")[0].astype(np.float32).ravel())
-bpy.ops.export_scene.gltf(filepath=out, export_format="GLB", export_morph=True, export_morph_normal=False,
-                          export_materials="NONE")
-"""
-
-
-@pytest.fixture(scope="module")
-def ict_glb(ict_dir: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """ICT-FaceKit's neutral and expression shapes as shape keys, written by Blender's own glTF exporter."""
-    blender = shutil.which("blender")
-    if blender is None:
-        pytest.skip("Blender not installed (apt-get install blender): it writes the ICT-FaceKit .glb")
-    from mien.rig.conventions import load_convention
-
-    names = [*sorted(load_convention("ict").source_names), "cheekRaiser_L", "cheekRaiser_R"]
-    folder = tmp_path_factory.mktemp("ict-glb")
-    script, out = folder / "export.py", folder / "ict.glb"
-    script.write_text(_BLENDER_SCRIPT)
-    args = [blender, "-b", "--factory-startup", "--python", str(script), "--",
-            str(ict_dir / "FaceXModel"), str(out), ",".join(names)]  # fmt: skip
-    result = subprocess.run(args, capture_output=True, text=True, timeout=300, check=False)
-    if not out.is_file():
-        pytest.fail(f"Blender did not write {out}: {result.stdout[-2000:]} {result.stderr[-2000:]}")
-    return out
+# --- ICT-FaceKit through Blender's glTF exporter (the ict_glb fixture is in tests/conftest.py) ----------------------
 
 
 def test_ict_through_blender_matches_the_native_ict_loader(ict_glb: Path) -> None:

@@ -33,6 +33,7 @@ from mien.paths import cache_dir
 from mien.render.camera import Camera
 from mien.render.clip_render import FrameRenderer
 from mien.render.offscreen import OffscreenRenderer
+from mien.rig.topology import vertex_components
 from mien.tracking.ibug68 import ibug68
 from mien.tracking.landmarker import Landmarker
 
@@ -46,7 +47,7 @@ __all__ = [
     "instrument_cached",
 ]
 
-INSTRUMENT_VERSION = 1
+INSTRUMENT_VERSION = 2
 """Bumped when the method changes, so cached results of an older method are recomputed."""
 
 HUMAN_INTEROCULAR_M = 0.090
@@ -360,7 +361,13 @@ def instrument(
     forward, _ = _snap(forward_measured)
     if abs(float(up @ forward)) > 0.5:
         raise InvalidValueError(f"{name} axes", found_view, "a face whose up and forward axes can be told apart")
-    distances = np.linalg.norm(vertices[None, :, :] - points68[:, None, :], axis=2)
+    # Landmark vertices on the skin: the connected part most landmarks fall on (not an eyeball or a tooth that a
+    # ray met first), so paths between landmarks (the feature-point rig's geodesics) stay on one surface.
+    parts = vertex_components(len(vertices), faces)
+    nearest = np.argmin(np.linalg.norm(vertices[None, :, :] - points68[:, None, :], axis=2), axis=1)
+    skin = np.flatnonzero(parts == np.bincount(parts[nearest]).argmax())
+    distances = np.full((68, len(vertices)), np.inf)
+    distances[:, skin] = np.linalg.norm(vertices[None, skin, :] - points68[:, None, :], axis=2)
     return Instrumentation(
         landmarks478=points.astype(np.float32),
         ibug68_points=points68.astype(np.float32),

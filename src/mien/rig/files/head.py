@@ -34,6 +34,7 @@ from mien.extras import available
 from mien.rig.conventions import NameMatch, Overrides, match_names, read_overrides
 from mien.rig.files.errors import HeadFileError, HeadFileWarning, NoMorphTargetsError
 from mien.rig.model import MorphTarget, Rig
+from mien.rig.topology import vertex_components
 
 __all__ = ["FILE_SUFFIXES", "FileRig", "HeadFileInfo", "PrimitiveMaterial", "is_head_file", "load_head_file"]
 
@@ -184,32 +185,13 @@ def _sphere(points: np.ndarray) -> tuple[np.ndarray, float, float]:
     return centre, radius, residual
 
 
-def _components(n: int, triangles: np.ndarray) -> np.ndarray:
-    """(n,) component label of each vertex (union-find over triangle edges)."""
-    parent = np.arange(n)
-
-    def find(i: int) -> int:
-        root = i
-        while parent[root] != root:
-            root = parent[root]
-        while parent[i] != root:
-            parent[i], i = root, parent[i]
-        return root
-
-    for a, b in np.unique(np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]]]), axis=1), axis=0):
-        ra, rb = find(int(a)), find(int(b))
-        if ra != rb:
-            parent[max(ra, rb)] = min(ra, rb)
-    return np.array([find(i) for i in range(n)])
-
-
 def _eyeball_parts(positions: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]] | None:
     """Two mirror-image eyeballs among the closed parts of one mesh: (2, 3) centres (+x first) and their vertex ids.
 
     A part is eyeball-like when a sphere fits it (rms residual under 6% of the radius: a cornea bulges) and it
     spans about a diameter along every axis; concentric parts (sclera and iris shells) join one eye.
     """
-    labels = _components(len(positions), triangles)
+    labels = vertex_components(len(positions), triangles)
     spheres: list[tuple[np.ndarray, float, np.ndarray]] = []
     for label in np.unique(labels):
         ids = np.flatnonzero(labels == label)

@@ -1,0 +1,110 @@
+"""Every job's door to a head: the VALID avatars and ICT-FaceKit written by Blender, instrumented, placed and
+calibrated; the cache answers the second load; named heads come as they are."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from tests.conftest import shared_root
+
+from mien.heads import instrument as instrument_module
+from mien.heads import load_head
+from mien.heads.amplitude import MAX_GAIN, reference_amplitudes, target_amplitudes
+from mien.rig.files import FileRig
+from mien.rig.heads import open_head
+
+pytest.importorskip("mediapipe", reason="mediapipe not installed (track extra)")
+pytest.importorskip("moderngl", reason="moderngl not installed (render extra)")
+
+
+def _valid() -> list[Path]:
+    root = shared_root()
+    folder = None if root is None else root / "avatars" / "valid"
+    if folder is None or not folder.is_dir():
+        pytest.skip("VALID avatars not available: set MIEN_SHARED to the shared folder (needs avatars/valid)")
+    return sorted(folder.glob("*.glb"))
+
+
+@pytest.fixture(scope="module")
+def valid_heads(landmarker_path: Path) -> dict[str, FileRig]:
+    return {path.name: load_head(str(path)) for path in _valid()}  # type: ignore[misc]
+
+
+def test_every_valid_avatar_gets_landmarks_on_its_face(valid_heads: dict[str, FileRig]) -> None:
+    assert len(valid_heads) == 4
+    for name, rig in valid_heads.items():
+        points = rig.neutral[rig.landmarks].astype(np.float64)
+        interocular = np.linalg.norm(points[45] - points[36])
+        assert 0.080 < interocular < 0.095, name  # adults' outer eye corners: about 90 mm
+        assert points[45, 0] > 0.03 and points[36, 0] < -0.03, name  # +x is the character's left
+        assert points[8, 1] < -0.09 and points[30, 2] > 0.01, name  # chin below the eyes, nose tip in front
+        # the eye corners lie beside the eyeballs the loader found, the mouth corners below them
+        assert np.all(np.abs(points[[36, 45], 1]) < 0.01), name
+        assert np.all(points[[48, 54], 1] < -0.05), name
+
+
+def test_timid_shapes_are_driven_as_far_as_the_reference(valid_heads: dict[str, FileRig]) -> None:
+    reference = reference_amplitudes()
+    for name, rig in valid_heads.items():
+        assert rig.shape_gains, name
+        assert max(rig.shape_gains.values()) <= MAX_GAIN
+        measured = target_amplitudes(rig, tuple(rig.shape_gains))
+        for target, gain in rig.shape_gains.items():
+            if gain < MAX_GAIN:  # not capped: now within 2 % of the reference
+                assert measured[target] == pytest.approx(reference[target], rel=0.02), (name, target)
+        assert rig.info is not None
+        raw = open_head(rig.info.path)
+        assert raw.info is not None
+        for target, gain in rig.shape_gains.items():  # the file's own name rows carry the gain
+            for (shape, weight, side), (raw_shape, raw_weight, raw_side) in zip(
+                rig.info.source_names[target], raw.info.source_names[target], strict=True
+            ):
+                assert (shape, side) == (raw_shape, raw_side)
+                assert weight == pytest.approx(raw_weight * gain)
+
+
+def test_the_feature_point_basis_compiles_on_a_valid_avatar() -> None:
+    rig = load_head(str(_valid()[0]), feature_points=True)
+    fp = [t for t in rig.targets if t.name.startswith("fp_")]
+    assert len(fp) == 54
+    for target in fp:  # a unit field: its anchor follows the feature one for one, nothing flies off
+        assert 0.99 < float(np.abs(target.deltas).max()) < 3.0, target.name
+    assert rig.info is not None
+    start, stop = rig.info.meshes["H_DDS_HighRes"]
+    moved = np.unique(np.concatenate([t.vertex_ids for t in fp]))
+    teeth = rig.regions["teeth"]
+    assert np.isin(moved, np.r_[np.arange(start, stop), teeth]).all()  # the skin, and the teeth the jaw carries
+
+
+def test_the_second_load_is_answered_by_the_cache(monkeypatch: pytest.MonkeyPatch) -> None:
+    path = str(_valid()[0])
+    first = load_head(path)
+
+    def fail(*args: object, **kwargs: object) -> None:
+        raise AssertionError("instrumented again: the cache was not used")
+
+    monkeypatch.setattr(instrument_module, "instrument", fail)
+    again = load_head(path)
+    np.testing.assert_array_equal(again.landmarks, first.landmarks)
+
+
+def test_ict_written_by_blender_is_found_near_icts_own_landmarks(ict_glb: Path, ict) -> None:  # type: ignore[no-untyped-def]
+    """The issue asks 2 mm (median); measured 4.6 mm on the untextured head (eyes 2-3 mm, lips 2.5, brows 6 with no
+    brows drawn, jaw contour 10). The bound guards that figure; VALIDATION.md reports the miss."""
+    native, _ = ict
+    rig = load_head(str(ict_glb))
+    assert isinstance(rig, FileRig)
+    own = native.neutral[native.landmarks].astype(np.float64)
+    found = rig.neutral[rig.landmarks].astype(np.float64)
+    shift = np.median(found - own, axis=0)  # the two loaders put the origin 0.4 mm apart (eyeball fits)
+    distances_mm = np.linalg.norm(found - shift - own, axis=1) * 1000.0
+    assert np.median(distances_mm) < 6.0
+    assert np.median(distances_mm[36:48]) < 4.0
+
+
+def test_named_heads_come_as_they_are() -> None:
+    builtin = load_head("builtin")
+    assert builtin.shape_gains == {} and not isinstance(builtin, FileRig)
+    assert load_head("builtin:b").name == open_head("builtin:b").name
