@@ -11,15 +11,17 @@ import io
 import secrets
 import time
 from typing import Any
+from urllib.parse import quote
 
 import orjson
 from fastapi import Depends, FastAPI, HTTPException, Query, Request, Response, WebSocket, status
-from fastapi.responses import JSONResponse
+from fastapi.responses import FileResponse, JSONResponse, RedirectResponse
 from pydantic import BaseModel, Field
 
 from mien.errors import InvalidValueError, MienError, UnknownNameError
 from mien.exchange import reader_for
 from mien.exchange.glb import head_glb_bytes
+from mien.server.head_view import MEDIA_TYPES, referenced_files
 from mien.server.protocol import MessageRejected, frame_bytes, idle_parts, parse_message
 from mien.server.registry import CharacterSpec, Entry
 from mien.server.running import RunningServer
@@ -58,7 +60,9 @@ class CharacterCreate(BaseModel):
     """A new character."""
 
     id: str = Field(pattern=r"^[A-Za-z0-9_.\-]{1,64}$", description="Character id")
-    head: str = Field("default", description="Head: default, builtin or ict")
+    head: str = Field(
+        "default", description="Head: default, builtin, ict, or a head file on the server (face.glb, file:PATH)"
+    )
     identity: str | None = Field(None, description="Identity preset of the head (null = default)")
     seed: int = Field(0, description="Seed of idle behaviour and laughter")
     idle: bool = Field(True, description="Idle behaviour on or off")
@@ -76,8 +80,17 @@ class CharacterInfo(BaseModel):
     idle: bool = Field(description="Any idle behaviour on")
     idle_parts: dict[str, bool] = Field(description="Each idle switch")
     expression_basis: str
-    target_names: list[str] = Field(description="Morph targets, in frame weight order")
+    target_names: list[str] = Field(
+        description="Morph targets, in frame weight order (a head file shown as itself: the file's own shape names)"
+    )
     frame_bytes: int = Field(description="Bytes of one WebSocket frame of this character")
+    head_url: str = Field(description="Where a viewer loads the head's glTF (the user's own file for a head file)")
+    head_file: str | None = Field(description="Name of the user's head file served as is (null: mien's glTF)")
+    file_to_rig: list[float] | None = Field(
+        description="Head file: 4x4 row-major similarity from the file's coordinates to mien's frame (metres, "
+        "origin between the eyes, +y up, +z forward); null otherwise"
+    )
+    head_note: str = Field(description="Why a head file is shown as mien's glTF instead (empty otherwise)")
 
 
 class CharacterState(BaseModel):
@@ -155,9 +168,19 @@ _ERRORS: dict[int | str, dict[str, Any]] = {
 }
 
 
+def _head_url(entry: Entry) -> str:
+    base = f"/api/characters/{quote(entry.spec.id)}"
+    source = entry.view.source if entry.view is not None else None
+    if source is not None and source.suffix.lower() == ".gltf":
+        return f"{base}/head/{quote(source.name)}"  # its buffers and images resolve beside it
+    return f"{base}/head.glb"
+
+
 def _info(entry: Entry) -> CharacterInfo:
     spec = entry.spec
-    names = list(entry.rig.target_names)
+    view = entry.view
+    names = list(view.frame_names if view is not None else entry.rig.target_names)
+    file_to_rig = view.file_to_rig if view is not None and view.source is not None else None
     return CharacterInfo(
         id=spec.id,
         row=entry.row,
@@ -169,6 +192,10 @@ def _info(entry: Entry) -> CharacterInfo:
         expression_basis=spec.expression_basis,
         target_names=names,
         frame_bytes=frame_bytes(len(names)),
+        head_url=_head_url(entry),
+        head_file=view.source.name if view is not None and view.source is not None else None,
+        file_to_rig=file_to_rig.ravel().tolist() if file_to_rig is not None else None,
+        head_note=view.note if view is not None else "",
     )
 
 
@@ -339,8 +366,30 @@ def create_app(server: RunningServer) -> FastAPI:
     @app.get("/api/characters/{character_id}/head.glb", dependencies=api,
              responses={**_ERRORS, 200: {"content": {"model/gltf-binary": {}}}})  # fmt: skip
     def head_glb(character_id: str) -> Response:
-        """The character's head as glTF binary (mesh and morph targets in frame weight order)."""
-        return Response(head_glb_bytes(entry_of(character_id).rig), media_type="model/gltf-binary")
+        """The character's head as glTF binary: mien's glTF of the rig (mesh and morph targets in frame weight
+        order), or the user's own ``.glb``/``.vrm`` file as is (its frames name their weights in
+        ``target_names``); a ``.gltf`` head file redirects to its ``head_url``."""
+        entry = entry_of(character_id)
+        source = entry.view.source if entry.view is not None else None
+        if source is None:
+            return Response(head_glb_bytes(entry.rig), media_type="model/gltf-binary")
+        if source.suffix.lower() == ".gltf":
+            return RedirectResponse(_head_url(entry), status_code=307)
+        return FileResponse(source, media_type=entry.view.media_type if entry.view else None)
+
+    @app.get("/api/characters/{character_id}/head/{path:path}", dependencies=api, responses=_ERRORS)
+    def head_file(character_id: str, path: str) -> Response:
+        """A ``.gltf`` head file (``head_url``) and the buffers and images it points at, by their relative URIs."""
+        entry = entry_of(character_id)
+        source = entry.view.source if entry.view is not None else None
+        if source is None or source.suffix.lower() != ".gltf":
+            raise HTTPException(404, f"{character_id}'s head is no .gltf file")
+        if path == source.name:
+            return FileResponse(source, media_type=MEDIA_TYPES[".gltf"])
+        found = referenced_files(source).get(path)
+        if found is None:
+            raise HTTPException(404, f"{path!r} is not a file {source.name} points at")
+        return FileResponse(found, media_type=MEDIA_TYPES.get(found.suffix.lower(), "application/octet-stream"))
 
     @app.websocket("/ws")
     async def stream(websocket: WebSocket, character: str | None = None, token: str | None = None) -> None:

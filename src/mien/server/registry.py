@@ -30,6 +30,7 @@ from mien.facs.idle import IdleSettings
 from mien.heads import load_head
 from mien.laughter.names import LAUGH_TYPES
 from mien.rig.driver import RigDriver
+from mien.server.head_view import HeadView, frame_weights, head_view
 from mien.server.protocol import AU_CHANNELS, N_AU_CHANNELS, Message, MessageRejected, Rejection, idle_parts
 from mien.server.stats import Counters, RateLimitedLog
 
@@ -50,9 +51,10 @@ class CharacterSpec:
     id: str
     """Character id (1-64 of ``A-Z a-z 0-9 _ . -``)."""
     head: str = "default"
-    """Head name (:data:`mien.rig.heads.HEADS`)."""
+    """Head name (:data:`mien.rig.heads.HEADS`), or ``"file"`` with the head file's path as :attr:`identity` (a
+    path or ``file:PATH`` here means the same)."""
     identity: str | None = None
-    """Identity preset of the head (None = the head's default)."""
+    """Identity preset of the head (None = the head's default); the file's path of a ``"file"`` head."""
     seed: int = 0
     """Seed of the idle behaviour and laughter."""
     idle: bool = True
@@ -85,6 +87,8 @@ class Entry:
     """Current :class:`mien.facs.idle.IdleSettings` (None: idle off)."""
     clips: list[Clip] = field(default_factory=list)
     """:class:`~mien.facs.clip.Clip` objects to start playing at the next tick."""
+    view: HeadView | None = None
+    """How viewers show its head, and the weights its frames carry (:mod:`mien.server.head_view`)."""
 
 
 class Registry:
@@ -105,6 +109,7 @@ class Registry:
         """Message fields this install cannot serve (``"laugh"``) -> why (the missing extra): such messages are
         rejected as ``missing_extra`` on arrival."""
         self._rigs: dict[tuple[str, str | None, bool], tuple[Any, Any]] = {}
+        self._views: dict[tuple[str, str | None, bool], HeadView] = {}
         self._log = RateLimitedLog()
 
     # ------------------------------------------------------------------ characters
@@ -115,15 +120,21 @@ class Registry:
         return next(iter(self.entries), None)
 
     def prepare(self, spec: CharacterSpec) -> tuple[Any, Any]:
-        """Load (once) and return the ``(rig, driver)`` of ``spec``'s head: the slow part of :meth:`add`, which
-        touches no character, so it can run off the event loop (raises UnknownNameError for a bad head,
-        identity or expression basis)."""
+        """Load (once) and return the ``(rig, driver)`` of ``spec``'s head, and how viewers show it (a head file:
+        its own glTF, with the rig -> file weight matrix): the slow part of :meth:`add`, which touches no
+        character, so it can run off the event loop (raises UnknownNameError for a bad head, identity or
+        expression basis, :class:`~mien.errors.MienError` for a head file that cannot be read)."""
         if spec.expression_basis not in EXPRESSION_BASES:
             raise UnknownNameError("expression basis", spec.expression_basis, EXPRESSION_BASES)
-        key = (spec.head, spec.identity, spec.expression_basis == "feature_points")
+        key = _head_key(spec)
         if key not in self._rigs:
             rig = load_head(spec.head, spec.identity, feature_points=key[2])
-            self._rigs[key] = (rig, RigDriver(rig))
+            driver = RigDriver(rig)
+            view = head_view(rig)
+            if view.note:
+                log.info("%s", view.note)
+            self._views[key] = view
+            self._rigs[key] = (rig, driver)
         return self._rigs[key]
 
     def add(self, spec: CharacterSpec) -> Entry:
@@ -137,7 +148,7 @@ class Registry:
                 seed=spec.seed, idle=spec.idle, expression_basis=spec.expression_basis, emotion_mode="pad"
             )
         )
-        entry = Entry(spec, row, rig, driver)
+        entry = Entry(spec, row, rig, driver, view=self._views[_head_key(spec)])
         if spec.idle:
             entry.idle = IdleSettings()
         self.entries[spec.id] = entry
@@ -168,7 +179,7 @@ class Registry:
             scratch.laugh(0, LAUGH_TYPES[1])
             scratch.step(0.5)
         except ImportError as exc:  # MissingExtraError, or a raw ImportError of a module not yet behind require
-            self.missing["laugh"] = _missing_extra(exc)
+            self.missing["laugh"] = _missing_extra(exc, "laughter")
             log.warning("laugh messages will be rejected: %s", self.missing["laugh"])
 
     def submit(self, message: Message, default: str | None = None) -> Entry:
@@ -293,7 +304,7 @@ class Registry:
         try:
             apply()
         except ImportError as exc:  # MissingExtraError, or a raw one from a module not yet behind require
-            detail = _missing_extra(exc)
+            detail = _missing_extra(exc, "laughter" if laugh else None)
             if laugh:
                 self.missing["laugh"] = detail  # reject the next ones on arrival
             self.reject(MessageRejected(Rejection.MISSING_EXTRA, f"{entry.spec.id}: {detail}"))
@@ -318,6 +329,12 @@ class Registry:
             features = self.batch.feature_weights[entry.row : entry.row + 1]
         return entry.driver.weights(frames, feature_weights=features)[0], entry.driver.pose(frames)[0]
 
+    def frame_output(self, entry: Entry) -> tuple[np.ndarray, np.ndarray]:
+        """``(weights (n_frame_names,) float32, pose (5,) degrees)`` of ``entry`` at the last step as its frames
+        carry them: the rig's weights, or a head file's own shape weights (:mod:`mien.server.head_view`)."""
+        weights, pose = self.rig_output(entry)
+        return (weights if entry.view is None else frame_weights(entry.view, weights)), pose
+
     def state(self, entry: Entry) -> dict[str, Any]:
         """The character's face frame at the last step as ``{channel: value}`` (AUs 0..5, pose degrees)."""
         if entry.row >= self.frames.shape[0]:
@@ -325,9 +342,15 @@ class Registry:
         return dict(zip(FACE_CHANNELS, self.frames[entry.row].tolist(), strict=True))
 
 
-def _missing_extra(error: ImportError) -> str:
-    """The message of the :class:`MissingExtraError` behind ``error`` (a raw ImportError gets one made)."""
+def _head_key(spec: CharacterSpec) -> tuple[str, str | None, bool]:
+    """What makes two characters' heads the same: head, identity, feature-point targets."""
+    return spec.head, spec.identity, spec.expression_basis == "feature_points"
+
+
+def _missing_extra(error: ImportError, extra: str | None = None) -> str:
+    """The message of the :class:`MissingExtraError` behind ``error`` (a raw ImportError gets one made, naming
+    ``extra``, the extra of the feature that failed, else the smallest extra holding the module)."""
     if isinstance(error, MissingExtraError):
         return str(error)
     module = (error.name or "an optional module").split(".", 1)[0]
-    return str(MissingExtraError(module, EXTRA_OF.get(module, "all")))
+    return str(MissingExtraError(module, extra or EXTRA_OF.get(module, "all")))

@@ -52,7 +52,7 @@ class Hub:
                 if entry is None:
                     frames[watching] = None
                 else:
-                    weights, pose = self.registry.rig_output(entry)
+                    weights, pose = self.registry.frame_output(entry)
                     frames[watching] = encode_frame(tick, entry.row, t_s, pose, weights)
             data = frames[watching]
             if data is None:

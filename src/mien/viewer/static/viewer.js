@@ -2,14 +2,18 @@
 //
 // Data flow: controls -> JSON commands over the WebSocket (HTTP API when it is closed) -> the server's
 // scheduler -> one binary frame per tick -> morph-target weights and head/eye pose -> a render when they
-// change. The head is the server's glTF (GET /api/characters/{id}/head.glb); weights arrive in the order of
-// its morph targets (glTF mesh extras.targetNames). Control lists come from /viewer/controls.json, built
-// from the package's catalogues.
+// change. The head is the glTF at the character's head_url (GET /api/characters): mien's glTF of its rig, or
+// the user's own file (textures, hair, skin) placed in mien's frame by the character's file_to_rig. Weights
+// arrive in the order of the character's target_names and drive every morph mesh's target OF THAT NAME (a
+// shape on the head and the teeth moves both). Control lists come from /viewer/controls.json, built from the
+// package's catalogues.
 import * as THREE from "three";
 import { GLTFLoader } from "three/addons/loaders/GLTFLoader.js";
+import { DRACOLoader } from "three/addons/loaders/DRACOLoader.js";
+import { MeshoptDecoder } from "three/addons/libs/meshopt_decoder.module.js";
 import { OrbitControls } from "three/addons/controls/OrbitControls.js";
 import { decodeFrame } from "./frame.js";
-import { poseQuaternion } from "./pose.js";
+import { framedTurn, poseNodeRole, poseQuaternion, vrmPoseNodes } from "./pose.js";
 
 const params = new URLSearchParams(location.search);
 const token = params.get("token") || "";
@@ -28,7 +32,7 @@ const state = {
   frameDirty: false,
   lastTick: null,
   ticksSeen: 0,
-  head: null, // { root, pivot, poseNode, poseRest, meshes: [{ mesh, map: Int32Array }], names, eyes }
+  head: null, // { root, pivot, poseNode, turnHead, meshes: [{ mesh, map: Int32Array }], names, eyes: [turn] }
   needsRender: true,
   renders: 0,
   loadingHead: null,
@@ -233,14 +237,22 @@ function applyCameraPreset(preset) {
 
 const NECK_PIVOT_M = [0, -0.09, -0.04]; // fallback pivot (rig frame) when the glTF has no head node
 
+// Decoders of compressed avatars (EXT_meshopt_compression, KHR_draco_mesh_compression), from the npm three
+// package mien serves; the Draco decoder's WebAssembly loads only when a file needs it.
+const dracoLoader = new DRACOLoader();
+dracoLoader.setDecoderPath("/vendor/three/examples/jsm/libs/draco/gltf/");
+
 async function loadHead(characterId) {
   const loading = (state.loadingHead = characterId);
   setStatus(`loading ${characterId}'s head...`);
+  const info = state.characters.get(characterId) || {};
   const loader = new GLTFLoader();
   loader.setRequestHeader(authHeaders());
+  loader.setMeshoptDecoder(MeshoptDecoder);
+  loader.setDRACOLoader(dracoLoader);
   let gltf;
   try {
-    gltf = await loader.loadAsync(withToken(`/api/characters/${encodeURIComponent(characterId)}/head.glb`));
+    gltf = await loader.loadAsync(withToken(info.head_url || `/api/characters/${encodeURIComponent(characterId)}/head.glb`));
   } catch (error) {
     if (state.loadingHead === loading) setStatus(`could not load the head of ${characterId}: ${error.message || error}`);
     return;
@@ -252,15 +264,47 @@ async function loadHead(characterId) {
       if (o.geometry) o.geometry.dispose();
     });
   }
-  state.head = prepareHead(gltf.scene);
+  state.head = prepareHead(gltf, info);
   scene.add(state.head.pivot);
   state.frameDirty = state.frame !== null;
   state.needsRender = true;
-  setStatus(`${characterId}: ${state.head.names.length} morph targets`);
+  const what = info.head_file ? `${info.head_file}, ` : "";
+  setStatus(info.head_note || `${characterId}: ${what}${state.head.names.length} morph targets`);
 }
 
-/** Wrap the glTF scene for posing and map every morph mesh's targets onto the frame's weight order. */
-function prepareHead(root) {
+/** The nodes head pose and gaze turn: a VRM file's humanoid bones, else nodes named as pose.js lists. */
+function poseNodes(gltf) {
+  const root = gltf.scene;
+  const vrm = vrmPoseNodes(gltf.parser && gltf.parser.json);
+  const byIndex = new Map();
+  const associations = gltf.parser && gltf.parser.associations;
+  if (associations && (vrm.head !== null || vrm.eyes.length)) {
+    root.traverse((o) => {
+      const index = associations.get(o)?.nodes;
+      if (index !== undefined && !byIndex.has(index)) byIndex.set(index, o);
+    });
+  }
+  let head = vrm.head !== null ? byIndex.get(vrm.head) || null : null;
+  let eyes = vrm.eyes.map((i) => byIndex.get(i)).filter(Boolean);
+  const named = { head: null, eyes: [] };
+  root.traverse((o) => {
+    if (o.isMesh) return;
+    const role = poseNodeRole(o.name);
+    if (role === "head" && !named.head) named.head = o;
+    else if (role === "eye") named.eyes.push(o);
+  });
+  if (!head) head = named.head;
+  if (!eyes.length) eyes = named.eyes;
+  return { head, eyes };
+}
+
+/**
+ * Wrap the glTF scene for posing, place a head file in mien's frame (file_to_rig), and map every morph mesh's
+ * targets onto the frame's weight order by name (the character's target_names; a server that gives none: the
+ * largest morph mesh's names).
+ */
+function prepareHead(gltf, info) {
+  const root = gltf.scene;
   const morphMeshes = [];
   root.traverse((o) => {
     if (o.isMesh && o.morphTargetDictionary) morphMeshes.push(o);
@@ -271,32 +315,44 @@ function prepareHead(root) {
     return names;
   };
   morphMeshes.sort((a, b) => b.morphTargetInfluences.length - a.morphTargetInfluences.length);
-  const names = morphMeshes.length ? namesOf(morphMeshes[0]) : [];
+  const names = Array.isArray(info.target_names) ? info.target_names : morphMeshes.length ? namesOf(morphMeshes[0]) : [];
   const order = new Map(names.map((n, i) => [n, i]));
   const meshes = morphMeshes.map((mesh) => ({
     mesh,
     map: Int32Array.from(namesOf(mesh), (n) => (order.has(n) ? order.get(n) : -1)),
   }));
-  // Head pose turns the glTF's "head" node (mien's glb puts it at the neck pivot); a head without one is
-  // wrapped in a group at a typical neck position.
-  let headNode = null;
-  root.traverse((o) => {
-    if (!headNode && /^head$/i.test(o.name) && !o.isMesh) headNode = o;
-  });
+  // A head file sits in its own frame (a full body's head 1.6 m up, centimetres...): file_to_rig puts it in
+  // mien's (metres, origin between the eyes), where the camera presets look.
+  const placed = new THREE.Group();
+  placed.name = "mien-placed";
+  if (Array.isArray(info.file_to_rig) && info.file_to_rig.length === 16) {
+    new THREE.Matrix4().set(...info.file_to_rig).decompose(placed.position, placed.quaternion, placed.scale);
+  }
+  placed.add(root);
+  // Head pose turns the glTF's head node or bone (mien's glb puts one at the neck pivot); a head without one is
+  // wrapped in a group at a typical neck position. Turns are in mien's axes, whatever a bone's local axes are.
+  const found = poseNodes(gltf);
   const pivot = new THREE.Group();
   pivot.name = "mien-head";
-  pivot.add(root);
-  if (!headNode) {
+  if (found.head) {
+    pivot.add(placed);
+  } else {
+    const offset = new THREE.Group();
+    offset.position.set(-NECK_PIVOT_M[0], -NECK_PIVOT_M[1], -NECK_PIVOT_M[2]);
+    offset.add(placed);
+    pivot.add(offset);
     pivot.position.set(...NECK_PIVOT_M);
-    root.position.set(-NECK_PIVOT_M[0], -NECK_PIVOT_M[1], -NECK_PIVOT_M[2]);
   }
-  const poseNode = headNode || pivot;
-  const poseRest = poseNode.quaternion.clone();
-  const eyes = [];
-  root.traverse((o) => {
-    if (/^eye[_ .-]?(l|r|left|right)$/i.test(o.name)) eyes.push({ node: o, rest: o.quaternion.clone() });
-  });
-  return { root, pivot, poseNode, poseRest, meshes, names, eyes };
+  pivot.updateMatrixWorld(true);
+  const frameOf = (node) => {
+    const q = new THREE.Quaternion();
+    if (node.parent && node !== pivot) node.parent.getWorldQuaternion(q);
+    return q;
+  };
+  const poseNode = found.head || pivot;
+  const turnHead = poseNode === pivot ? framedTurn(pivot, new THREE.Quaternion()) : framedTurn(poseNode, frameOf(poseNode));
+  const eyes = found.eyes.map((node) => framedTurn(node, frameOf(node)));
+  return { root, pivot, poseNode, turnHead, meshes, names, eyes };
 }
 
 const gazeQuaternion = new THREE.Quaternion();
@@ -312,10 +368,10 @@ function applyFrame(frame) {
     for (let i = 0; i < map.length; i++) influences[i] = map[i] >= 0 && map[i] < w.length ? w[map[i]] : 0;
   }
   const [yaw, pitch, roll, gazeYaw, gazePitch] = frame.pose;
-  head.poseNode.quaternion.copy(head.poseRest).multiply(poseQuaternion(yaw, pitch, roll, headQuaternion));
+  head.turnHead(poseQuaternion(yaw, pitch, roll, headQuaternion));
   if (head.eyes.length) {
-    poseQuaternion(gazeYaw, gazePitch, 0, gazeQuaternion); // gaze: mien.rig.pose.gaze_rotation
-    for (const eye of head.eyes) eye.node.quaternion.copy(eye.rest).multiply(gazeQuaternion);
+    poseQuaternion(gazeYaw, gazePitch, 0, gazeQuaternion); // gaze: mien.rig.pose.gaze_rotation, in the head's frame
+    for (const turnEye of head.eyes) turnEye(gazeQuaternion);
   }
 }
 
