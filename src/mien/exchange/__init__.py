@@ -52,6 +52,7 @@ FORMATS: dict[str, str] = {
     "clip_npz": "mien.exchange.clip_npz",
     "maya_anim": "mien.exchange.maya_anim",
     "glb": "mien.exchange.glb",
+    "vrm": "mien.exchange.vrm",
 }
 """Format name -> module. For a suffix shared by several formats the first listed is the default writer."""
 

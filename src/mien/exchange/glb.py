@@ -41,7 +41,16 @@ from mien.facs.clip import Clip
 from mien.fileio.streams import Source, TargetT, read_bytes, source_name, write_bytes
 from mien.rig.model import Rig
 
-__all__ = ["SUFFIXES", "head_glb_bytes", "read", "write"]
+__all__ = [
+    "SUFFIXES",
+    "document_of",
+    "head_glb_bytes",
+    "matrix_quaternions",
+    "pack_glb",
+    "read",
+    "split_glb",
+    "write",
+]
 
 SUFFIXES: tuple[str, ...] = (".glb",)
 """File suffixes of this format."""
@@ -183,7 +192,11 @@ def _quaternions(poses_deg: np.ndarray) -> np.ndarray:
     """(n, 4) float32 unit quaternions (x, y, z, w) of the head rotations of (n, 5) pose degrees."""
     from mien.rig.pose import _rotations
 
-    r = _rotations(poses_deg[:, 0], poses_deg[:, 1], poses_deg[:, 2])
+    return matrix_quaternions(_rotations(poses_deg[:, 0], poses_deg[:, 1], poses_deg[:, 2]))
+
+
+def matrix_quaternions(r: np.ndarray) -> np.ndarray:
+    """(n, 4) float32 unit quaternions (x, y, z, w), glTF's order, of (n, 3, 3) rotation matrices."""
     w = np.sqrt(np.maximum(0.0, 1.0 + r[:, 0, 0] + r[:, 1, 1] + r[:, 2, 2])) / 2.0
     x = np.sqrt(np.maximum(0.0, 1.0 + r[:, 0, 0] - r[:, 1, 1] - r[:, 2, 2])) / 2.0
     y = np.sqrt(np.maximum(0.0, 1.0 - r[:, 0, 0] + r[:, 1, 1] - r[:, 2, 2])) / 2.0
@@ -213,6 +226,14 @@ def _angles(quaternions: np.ndarray) -> np.ndarray:
 
 
 def _document(rig: Rig, weights: np.ndarray | None, poses: np.ndarray | None, fps: float) -> bytes:
+    return pack_glb(*document_of(rig, weights, poses, fps))
+
+
+def document_of(
+    rig: Rig, weights: np.ndarray | None, poses: np.ndarray | None, fps: float
+) -> tuple[dict[str, Any], bytes]:
+    """The glTF JSON (a dict) and binary chunk of ``rig`` animated by (n, n_targets) ``weights`` and (n, 5)
+    ``poses`` at ``fps`` (both None: the still head). Node 0 is ``head``, node 1 ``face`` (the mesh)."""
     from mien.render.appearance import visible_faces
     from mien.render.offscreen import vertex_normals
 
@@ -285,6 +306,12 @@ def _document(rig: Rig, weights: np.ndarray | None, poses: np.ndarray | None, fp
     gltf["buffers"] = [{"byteLength": len(binary)}]
     gltf["bufferViews"] = built.views
     gltf["accessors"] = built.accessors
+    return gltf, binary
+
+
+def pack_glb(gltf: dict[str, Any], binary: bytes) -> bytes:
+    """GLB bytes of a glTF JSON document and its binary chunk (buffer 0; padded here to 4 bytes)."""
+    binary = binary + b"\0" * ((-len(binary)) % 4)
     text = json.dumps(gltf, separators=(",", ":")).encode("utf-8")
     text += b" " * ((-len(text)) % 4)
     total = 12 + 8 + len(text) + 8 + len(binary)
@@ -313,6 +340,10 @@ def head_glb_bytes(rig: Rig) -> bytes:
 def write(clip: Clip, target: TargetT, rig: Rig | None = None) -> TargetT:
     """Write ``rig`` (default: :func:`mien.rig.heads.open_head`) animated by ``clip`` as GLB to ``target``.
 
+    A head read from the user's own glTF / GLB / VRM file (a :class:`~mien.rig.files.head.FileRig`) is written
+    as that file with the animation added (:mod:`mien.exchange.glb_user`); any other head as the document the
+    module doc describes.
+
     ``clip``: face channels (AU intensities, pose degrees) or the rig's target names (weights 0..1) plus
     optional pose channels (see :func:`mien.rig.face_weights.clip_to_rig`). Returns ``target``.
     """
@@ -324,6 +355,12 @@ def write(clip: Clip, target: TargetT, rig: Rig | None = None) -> TargetT:
         rig = open_head()
     if clip.n_frames == 0:
         raise InvalidValueError("clip", "0 frames", "a clip with at least one frame to animate")
+    from mien.exchange.glb_user import carries_file
+
+    if carries_file(rig):  # a head read from the user's glTF file: that file, animated
+        from mien.exchange.glb_user import write as write_user_file
+
+        return write_user_file(clip, target, rig)
     weights, poses = clip_to_rig(clip, rig)
     write_bytes(_document(rig, weights, poses, clip.fps), target)
     return target
@@ -333,7 +370,9 @@ def write(clip: Clip, target: TargetT, rig: Rig | None = None) -> TargetT:
 # Reading
 
 
-def _parse(data: bytes, name: str) -> tuple[dict[str, Any], bytes]:
+def split_glb(data: bytes, name: str) -> tuple[dict[str, Any], bytes]:
+    """The JSON document (a dict) and the binary chunk (``b""`` when none) of GLB ``data``; ``name`` names the
+    file in errors (truncated or corrupt data raises :class:`~mien.errors.InvalidValueError`)."""
     if len(data) < 20:
         raise InvalidValueError(f"{name} byte 0", f"{len(data)} bytes", "a GLB file (12-byte header and a JSON chunk)")
     magic, version, total = struct.unpack_from("<III", data, 0)
@@ -408,7 +447,7 @@ def read(source: Source) -> Clip:
     has morph targets, or without an animation of them, raises naming the file.
     """
     name = source_name(source)
-    document, binary = _parse(read_bytes(source), name)
+    document, binary = split_glb(read_bytes(source), name)
     meshes = document.get("meshes", [])
     nodes = document.get("nodes", [])
     mesh_index = next((i for i, m in enumerate(meshes) if any("targets" in p for p in m.get("primitives", []))), None)
