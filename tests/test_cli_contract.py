@@ -116,6 +116,14 @@ CASES: list[Case] = [
         "--url",
     ),
     # track
+    # head
+    case("head", "no action", "head", "required", "ACTION"),
+    case("head", "missing head file", "head inspect {d}/nothing.glb", "nothing.glb", "no such file"),
+    case("head", "unsupported head file", "head inspect {d}/face.fbx", "face.fbx", ".glb", "Blender"),
+    case("head", "truncated head file", "head inspect {d}/truncated.glb", "truncated.glb", "truncated"),
+    case("head", "not a glTF file", "head inspect {d}/text.glb", "text.glb", "not a readable glTF"),
+    case("head", "unknown named head", "head inspect robot", "unknown head 'robot'"),
+    case("head", "picture not a png", "head inspect builtin -o {d}/landmarks.jpg", "landmarks.jpg", ".png"),
     case("track", "missing file", "track {d}/nothing.mp4", "no such file", "nothing.mp4"),
     case("track", "typo in a file name", "track {d}/clpi.mp4", "did you mean", "clip.mp4"),
     case("track", "empty file", "track {d}/empty.mp4", "empty.mp4 is empty"),
@@ -244,6 +252,9 @@ def inputs(tmp_path: Path) -> Path:
     (tmp_path / "videos").mkdir()
     (tmp_path / "labels.csv").write_text("video,type,performer\nclip.mp4,laughter,p1\n")
     (tmp_path / "labels_header.csv").write_text("video,type,performer\n")
+    (tmp_path / "face.fbx").write_text("Kaydara FBX Binary\n")
+    (tmp_path / "truncated.glb").write_bytes(b"glTF\x02\x00\x00\x00")
+    (tmp_path / "text.glb").write_text("not a glTF file\n")
     return tmp_path
 
 

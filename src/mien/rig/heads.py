@@ -23,7 +23,7 @@ from typing import Protocol
 from mien.errors import InvalidValueError, UnknownNameError
 from mien.paths import asset_path
 from mien.rig.builtin_head import BUILTIN_IDENTITIES, builtin_head
-from mien.rig.files.head import load_head_file
+from mien.rig.files.head import FILE_SUFFIXES, load_head_file
 from mien.rig.ict_facekit import ict_identity_presets, ict_missing_files, load_ict_facekit
 from mien.rig.model import Rig
 
@@ -144,6 +144,14 @@ def parse_head_spec(spec: str) -> tuple[str, str | None]:
     name, _, identity = spec.strip().partition(":")
     if name == "file":
         return "file", identity or None
+    if name not in HEADS and (Path(spec).suffix or "/" in spec or Path(spec).exists()):
+        path = Path(spec)
+        if path.suffix.lower() in FILE_SUFFIXES and not path.exists():
+            raise InvalidValueError("head file", spec, "an existing file: no such file")
+        raise InvalidValueError(
+            "head file", spec, f"a {', '.join(FILE_SUFFIXES)} file or a folder of OBJ shapes (export FBX, BLEND or "
+            "USD characters to .glb first, e.g. with Blender)"
+        )  # fmt: skip
     if name not in HEADS:
         raise UnknownNameError("head", name, HEADS)
     return name, identity or None
