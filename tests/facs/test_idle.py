@@ -8,6 +8,7 @@ AU45L = FACE_CHANNELS.index("AU45L")
 ONLY_BLINK = IdleSettings(mouth=False, eyelids=False, neck=False, gaze=False, wobble=False)
 
 
+@pytest.mark.slow
 def test_blink_intervals_follow_normal_6_2_over_a_long_run():
     idle = Idle(seed=11, settings=ONLY_BLINK)
     starts, closed, previous = [], False, 0.0
@@ -43,6 +44,7 @@ def test_each_blink_lasts_360_ms_and_closes_at_e():
     assert peak == pytest.approx(5.0, abs=0.03)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("walk_index", "spec"), [(0, MOUTH_WALK), (2, EYELID_WALK), (3, NECK_WALK)])
 def test_random_walks_stay_bounded_and_step_with_the_papers_probabilities(walk_index, spec):
     idle = Idle(seed=5)

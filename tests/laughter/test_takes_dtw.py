@@ -132,6 +132,7 @@ def _distances(takes: dict[str, Take]) -> dict[tuple[str, str], float]:
     return {(a, b): float(matrix[i, j]) for i, a in enumerate(names) for j, b in enumerate(names)}
 
 
+@pytest.mark.slow
 def test_renders_read_as_faces_and_carry_the_expression(rendered_takes: dict[str, Take]) -> None:
     for name, take in rendered_takes.items():
         track = take.track
@@ -146,6 +147,7 @@ def test_renders_read_as_faces_and_carry_the_expression(rendered_takes: dict[str
     assert rendered_takes["surprise"].curves.channel("jaw")[APEX].mean() > 0.2  # the jaw drops
 
 
+@pytest.mark.slow
 def test_two_smile_takes_are_closer_than_other_expressions(rendered_takes: dict[str, Take]) -> None:
     d = _distances(rendered_takes)
     same = d["smile_a", "smile_b"]
@@ -154,6 +156,7 @@ def test_two_smile_takes_are_closer_than_other_expressions(rendered_takes: dict[
             assert MARGIN * same < d[smile, other], (smile, other, same, d[smile, other])
 
 
+@pytest.mark.slow
 def test_real_smile_is_nearer_the_rendered_smiles(rendered_takes: dict[str, Take], real_smile: Take) -> None:
     """The real video as a third smile take: from its curves, every rendered smile is nearer than any other.
 

@@ -376,6 +376,7 @@ def foreground(image: np.ndarray) -> np.ndarray:
     return np.abs(image.astype(int) - np.array(BACKGROUND)).max(axis=2) > 6
 
 
+@pytest.mark.slow
 def test_valid_avatar_head_looks_like_three_js(
     chromium: object, make_textured: Callable[..., TexturedRenderer]
 ) -> None:

@@ -342,7 +342,7 @@ def study_heads(ict_dir: Path | None) -> list[Rig]:
     return heads
 
 
-@pytest.fixture(scope="module", params=["builtin", "ict"])
+@pytest.fixture(scope="module", params=["builtin", pytest.param("ict", marks=pytest.mark.slow)])
 def study_head(request: pytest.FixtureRequest) -> list[tuple[Rig, Rig, RigDriver]]:
     """``(rig, full, driver)`` per head of the study (the built-in one, or ICT a and b): :func:`driven` on its
     feature-point rig, built once for the module's tests."""

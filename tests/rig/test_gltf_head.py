@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from tests.conftest import shared_root
+from tests.conftest import valid_avatars
 
 from mien.facs.arkit import ARKIT_NAMES
 from mien.rig.files import FileRig, HeadFileError, HeadFileWarning, NoMorphTargetsError, load_head_file
@@ -239,13 +239,10 @@ def test_an_obj_folder_loads(tmp_path: Path) -> None:
 
 
 def _valid() -> list[Path]:
-    root = shared_root()
-    folder = None if root is None else root / "avatars" / "valid"
-    if folder is None or not folder.is_dir():
-        pytest.skip("VALID avatars not available: set MIEN_SHARED to the shared folder (needs avatars/valid)")
-    return sorted(folder.glob("*.glb"))
+    return valid_avatars()
 
 
+@pytest.mark.slow
 def test_valid_avatars_load_in_mien_frame() -> None:
     for path in _valid():
         rig = open_head(str(path))

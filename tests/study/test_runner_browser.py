@@ -21,6 +21,8 @@ from mien.study.design import load_design
 from mien.study.stimuli import make_stimuli
 from mien.study.storage import Store, database_url
 
+pytestmark = pytest.mark.slow  # a study server, Chromium and a participant session: 7-12 s
+
 DESIGN = """
 [study]
 name = "browser"
@@ -80,6 +82,8 @@ class Server:
         assert self.process is not None
         self.process.send_signal(signal.SIGKILL)
         self.process.wait(timeout=10)
+        if self.process.stderr is not None:
+            self.process.stderr.close()
 
     def stop(self) -> None:
         if self.process is not None and self.process.poll() is None:
@@ -88,6 +92,8 @@ class Server:
                 self.process.wait(timeout=10)
             except subprocess.TimeoutExpired:
                 self.kill()
+        if self.process is not None and self.process.stderr is not None:
+            self.process.stderr.close()
 
 
 @pytest.fixture(params=["sqlite", pytest.param("postgresql", marks=pytest.mark.database)])

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import io
 import json
 import math
 from pathlib import Path
@@ -56,7 +57,7 @@ def test_write_gives_json_csv_and_figures(tmp_path: Path) -> None:
     assert data["closed_loop"]["per_au_r"]["AU1"] is None and data["closed_loop"]["constant_rows"] == ["AU1"]
     assert data["closed_loop"]["r"] == pytest.approx(result.closed_loop.r, abs=1e-4)
     assert np.asarray(data["expression"]["human_map"]).shape == (3, 20)
-    rows = list(csv.DictReader(paths["per_au"].open()))
+    rows = list(csv.DictReader(io.StringIO(paths["per_au"].read_text())))
     assert [row["au"] for row in rows] == ["AU1", "AU12", "AU25"]
     assert rows[0]["closed-loop_r"] == "" and float(rows[1]["closed-loop_r"]) > 0.9
     assert paths["closed_loop"].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -34,6 +34,8 @@ from mien.facs.catalogue import ACTION_UNITS, OPENFACS_AUS  # noqa: E402
 from mien.ports import free_port  # noqa: E402
 from mien.viewer.vendor import three_dir  # noqa: E402
 
+pytestmark = pytest.mark.slow  # a page in Chromium on a software rasteriser: 4-15 s a test
+
 VIEWPORT = {"width": 800, "height": 540}
 FIRST, SECOND, THIRD = "calm", "other", "third"  # characters without idle motion: only commands move them
 START_TIMEOUT_S = 30.0
@@ -93,6 +95,8 @@ def _serve(*options: str) -> Iterator[Live]:
         except subprocess.TimeoutExpired:
             process.kill()
             process.wait(5)
+        if process.stdout is not None:
+            process.stdout.close()
 
 
 @pytest.fixture(scope="module")
@@ -167,12 +171,13 @@ def open_page(chromium: object, live: Live) -> Iterator[Opener]:
         page.close()
 
 
-def _regions(width: int, height: int) -> dict[str, tuple[slice, slice]]:
-    """Pixel boxes (rows, columns) of the mouth and brows of the built-in head in the page's first camera."""
+def _regions(width: int, height: int, head: str = "builtin") -> dict[str, tuple[slice, slice]]:
+    """Pixel boxes (rows, columns) of the mouth and brows of ``head`` in the page's first camera (a head file is
+    placed in mien's frame by the page, so its instrumented landmarks project the same way)."""
     from mien.heads import load_head
     from mien.render.camera import CAMERA_PRESETS
 
-    rig = load_head("builtin")
+    rig = load_head(head)
     points = rig.neutral[rig.landmarks]
     pixels = CAMERA_PRESETS["frontal-1m"].project(points, width, height)
     out = {}
@@ -454,3 +459,71 @@ def test_the_page_reconnects_when_the_server_comes_back(chromium: object) -> Non
         assert [e for e in page.errors if "ERR_CONNECTION_REFUSED" not in e] == []
     finally:
         page.close()
+
+
+def _valid_avatar() -> Path:
+    from tests.conftest import shared_root
+
+    root = shared_root()
+    path = None if root is None else root / "avatars" / "valid" / "Asian_F_1_Casual.glb"
+    if path is None or not path.is_file():
+        pytest.skip("VALID avatars not available: set MIEN_SHARED to the shared folder (needs avatars/valid)")
+    for module, extra in (("meshopt", "heads"), ("mediapipe", "track"), ("moderngl", "render")):
+        pytest.importorskip(module, reason=f"a head file needs the {extra} extra")
+    return path
+
+
+@pytest.mark.filterwarnings("ignore:AU mapping .* lacks targets:UserWarning")  # a VALID head has no mouthClose
+def test_a_users_avatar_shows_its_own_textures_and_moves_by_udp(
+    chromium: object, landmarker_path: Path, tmp_path: Path
+) -> None:
+    path = _valid_avatar()
+    regions = _regions(VIEWPORT["width"], VIEWPORT["height"], str(path))  # instruments it once (cached)
+    with _serve("--no-idle", "--head", str(path)) as server:
+        page = Page(chromium, f"{server.url}/")
+        try:
+            head = page.page.evaluate(
+                "(() => { const h = window.mienViewer.head; return { names: h.names.length, pose: h.poseNode.name,"
+                " eyes: h.eyes.length, meshes: h.meshes.map((m) => m.mesh.name) }; })()"
+            )
+            assert head == {"names": 96, "pose": "Head", "eyes": 2, "meshes": ["H_DDS_HighRes", "h_TeethDown"]}
+            neutral = page.settle()
+            _save(neutral, tmp_path / "avatar.png")
+            height, width = neutral.shape[:2]
+            regions = _regions(width, height, str(path))
+            background = neutral[2, 2].astype(int)
+            # the face between the brows and the mouth: the file's own skin texture, lit, not a flat colour
+            (brow_rows, brow_columns), (mouth_rows, mouth_columns) = regions["brows"], regions["mouth"]
+            cheeks = neutral[brow_rows.stop : mouth_rows.start, brow_columns].reshape(-1, 3).astype(float)
+            assert (np.abs(cheeks - background).sum(axis=1) > 60).mean() > 0.95, "the face is not where we look"
+            red, green, blue = cheeks.mean(axis=0)
+            assert red > green > blue and red > blue + 30 and red > 120, f"mean face colour {red, green, blue}: skin?"
+            assert cheeks.std(axis=0).mean() > 8, "a flat colour: the texture did not load"
+            lips = neutral[mouth_rows, mouth_columns].reshape(-1, 3).astype(float)
+            assert (lips[:, 0] - lips[:, 1]).max() > 60  # red lips from the texture
+            # OpenFACS over UDP: a surprised face (brows up, jaw dropped) held, then neutral, then again
+            surprise: dict[str, float] = {f"AU{code}": 0 for code in OPENFACS_AUS}
+            surprise.update({"AU1": 5, "AU2": 5, "AU5": 3, "AU26": 5, "Speed": 0.3})
+            relaxed: dict[str, float] = {**{key: 0 for key in surprise}, "Speed": 0.3}
+
+            def datagram(message: dict[str, float]) -> Callable[[], None]:
+                def send() -> None:
+                    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as udp:
+                        udp.sendto(json.dumps(message).encode(), ("127.0.0.1", server.udp_port))
+
+                return send
+
+            latencies = []
+            for message in (surprise, relaxed, surprise):
+                latency, changes = _latency(page, regions, datagram(message))
+                assert math.isfinite(latency), f"mouth/brow pixels of the avatar did not change within 3 s: {changes}"
+                latencies.append(latency)
+            print(f"VALID avatar: OpenFACS UDP -> mouth and brow pixels: {', '.join(f'{s:.3f}' for s in latencies)} s")
+            assert sorted(latencies)[1] < 1.0, f"median latency over 1 s: {latencies}"
+            after = page.settle()
+            _save(after, tmp_path / "avatar-surprise.png")
+            assert min(_change(neutral, after, region) for region in regions.values()) > 3.0, f"see {tmp_path}"
+            assert _change(neutral, after, (slice(0, 40), slice(0, 40))) < 0.5  # the face moved, not the camera
+            assert page.errors == []
+        finally:
+            page.close()
