@@ -37,6 +37,15 @@ def _point_assets_at_shared() -> None:
 _point_assets_at_shared()
 
 
+def valid_avatars() -> list[Path]:
+    """The four VALID avatars under ``$MIEN_SHARED/avatars/valid`` (skips the test when absent)."""
+    root = shared_root()
+    folder = None if root is None else root / "avatars" / "valid"
+    if folder is None or not folder.is_dir():
+        pytest.skip("VALID avatars not available: set MIEN_SHARED to the shared folder (needs avatars/valid)")
+    return sorted(folder.glob("*.glb"))
+
+
 def _shared(relative: str, what: str) -> Path:
     root = shared_root()
     if root is None or not (root / relative).exists():

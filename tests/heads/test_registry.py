@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from tests.conftest import shared_root
+from tests.conftest import valid_avatars
 
 from mien.heads import instrument as instrument_module
 from mien.heads import load_head
@@ -20,11 +20,7 @@ pytest.importorskip("moderngl", reason="moderngl not installed (render extra)")
 
 
 def _valid() -> list[Path]:
-    root = shared_root()
-    folder = None if root is None else root / "avatars" / "valid"
-    if folder is None or not folder.is_dir():
-        pytest.skip("VALID avatars not available: set MIEN_SHARED to the shared folder (needs avatars/valid)")
-    return sorted(folder.glob("*.glb"))
+    return valid_avatars()
 
 
 @pytest.fixture(scope="module")

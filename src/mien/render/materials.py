@@ -155,6 +155,23 @@ def decode_texture(data: bytes, mime_type: str = "") -> np.ndarray:
         return np.ascontiguousarray(np.asarray(image.convert("RGBA"), dtype=np.uint8))
 
 
+def _decode_or_warn(data: bytes, mime_type: str, where: str) -> np.ndarray | None:
+    """:func:`decode_texture`, or None with a :class:`TextureDecodeWarning` naming ``where`` (its parts are then
+    drawn in their base-colour factor)."""
+    try:
+        if not data:
+            raise ValueError("the file holds no data for it")
+        return decode_texture(data, mime_type)
+    except (OSError, ValueError) as exc:
+        warnings.warn(
+            f"{where} ({mime_type or 'unknown type'}) cannot be decoded ({exc}); its parts are drawn in their "
+            "base-colour factor",
+            TextureDecodeWarning,
+            stacklevel=4,
+        )
+        return None
+
+
 def _texture_source(gltf: Any, texture_index: int) -> int | None:
     """The image index a glTF texture samples: its ``EXT_texture_webp`` source first, else ``source``."""
     textures = gltf.textures or []
@@ -179,18 +196,7 @@ def _material(scene: GltfScene, index: int | None, decoded: dict[int, np.ndarray
         image = _texture_source(scene.gltf, int(pbr.baseColorTexture.index))
         if image is not None and image not in decoded:
             data, mime = scene.images.get(image, (b"", ""))
-            try:
-                if not data:
-                    raise ValueError("the file holds no data for it")
-                decoded[image] = decode_texture(data, mime)
-            except (OSError, ValueError) as exc:
-                warnings.warn(
-                    f"{scene.path}: texture image {image} ({mime or 'unknown type'}) of material {name!r} cannot "
-                    f"be decoded ({exc}); its parts are drawn in their base-colour factor",
-                    TextureDecodeWarning,
-                    stacklevel=3,
-                )
-                decoded[image] = None
+            decoded[image] = _decode_or_warn(data, mime, f"{scene.path}: texture image {image} of material {name!r}")
         texture = None if image is None else decoded[image]
     mode = AlphaMode(source.alphaMode or "OPAQUE")
     cutoff = 0.5 if source.alphaCutoff is None else float(source.alphaCutoff)
@@ -245,15 +251,8 @@ def textured_mesh_from_rig(rig: object) -> tuple[TexturedMesh, np.ndarray] | Non
         if key not in decoded:
             texture = None
             if drawn.base_color_image:
-                try:
-                    texture = decode_texture(drawn.base_color_image, drawn.base_color_mime)
-                except (OSError, ValueError) as exc:
-                    warnings.warn(
-                        f"{rig.info.path}: the texture of {drawn.mesh_name} ({drawn.base_color_mime or 'unknown type'})"
-                        f" cannot be decoded ({exc}); it is drawn in its base-colour factor",
-                        TextureDecodeWarning,
-                        stacklevel=2,
-                    )
+                where = f"{rig.info.path}: the texture of {drawn.mesh_name}"
+                texture = _decode_or_warn(drawn.base_color_image, drawn.base_color_mime, where)
             decoded[key] = Material(
                 drawn.mesh_name, texture, drawn.base_color_factor, AlphaMode(drawn.alpha_mode), drawn.alpha_cutoff,
                 drawn.double_sided,

@@ -17,7 +17,7 @@ when installed), so wrinkles and creases of an expression catch the light.
 from __future__ import annotations
 
 import types
-from typing import Any
+from typing import Any, Self
 
 import numpy as np
 
@@ -31,6 +31,7 @@ __all__ = [
     "DEFAULT_SKIN_RGB",
     "EGL_APT_PACKAGES",
     "EGLUnavailableError",
+    "GLSurface",
     "OffscreenRenderer",
     "vertex_normals",
 ]
@@ -137,7 +138,65 @@ def _check_size(width: int, height: int) -> tuple[int, int]:
     return int(width), int(height)
 
 
-class OffscreenRenderer:
+class GLSurface:
+    """A headless OpenGL context and a (multisampled) framebuffer, read back as (height, width, 3) uint8 images:
+    what every mien renderer draws into. Subclasses call :meth:`_open` first and :meth:`_read_into` last."""
+
+    _ctx: Any = None
+
+    def _open(self, width: int, height: int, samples: int, backend: str | None) -> int:
+        """Create the context and framebuffers; the multisamples the driver gives (``samples`` at most)."""
+        moderngl = _require_moderngl()
+        try:
+            self._ctx = moderngl.create_context(standalone=True, **({"backend": backend} if backend else {}))
+        except Exception as error:
+            raise EGLUnavailableError(
+                f"could not create a headless OpenGL context ({type(error).__name__}: {error}). On Debian or "
+                f"Ubuntu install Mesa's EGL: sudo apt-get install {' '.join(EGL_APT_PACKAGES)}; elsewhere pass "
+                "backend=None (platform OpenGL) or see mien.render.offscreen's documentation."
+            ) from error
+        ctx = self._ctx
+        with ctx:
+            samples = min(samples, ctx.max_samples)
+            size = (width, height)
+            self._fbo = ctx.framebuffer(
+                color_attachments=[ctx.renderbuffer(size, 4, samples=samples)],
+                depth_attachment=ctx.depth_renderbuffer(size, samples=samples),
+            )
+            self._resolve = ctx.framebuffer(color_attachments=[ctx.renderbuffer(size, 4)]) if samples else None
+        return int(samples)
+
+    @staticmethod
+    def _light(program: Any) -> None:
+        """Set the shared lights (:data:`mien.render.shaders.LIGHTS`) on ``program``."""
+        for name, (direction, color) in LIGHTS.items():
+            unit = np.asarray(direction, np.float32) / np.linalg.norm(direction)
+            program[f"u_{name}_direction"].value = tuple(unit.tolist())
+            program[f"u_{name}_color"].value = color
+
+    def _read_into(self, out: np.ndarray) -> None:
+        """Resolve the multisamples (inside the context) and read the picture into ``out``."""
+        source = self._fbo
+        if self._resolve is not None:
+            self._ctx.copy_framebuffer(self._resolve, self._fbo)
+            source = self._resolve
+        source.read_into(out, components=3)
+
+    def close(self) -> None:
+        """Free the OpenGL context and its buffers (idempotent)."""
+        ctx = getattr(self, "_ctx", None)
+        if ctx is not None:
+            ctx.release()
+            self._ctx = None
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.close()
+
+
+class OffscreenRenderer(GLSurface):
     """Renders one mesh topology, frame after frame, into (height, width, 3) uint8 sRGB images.
 
     ``faces`` (m, 3) int32 triangles; ``vertex_colors`` (n, 3) linear RGB albedo in 0..1 (None: a skin
@@ -197,29 +256,10 @@ class OffscreenRenderer:
         self._normal_sign = 1.0
         self._normals = np.empty((0, 3), np.float32)
         moderngl = _require_moderngl()
-        try:
-            self._ctx = moderngl.create_context(standalone=True, **({"backend": backend} if backend else {}))
-        except Exception as error:
-            raise EGLUnavailableError(
-                f"could not create a headless OpenGL context ({type(error).__name__}: {error}). On Debian or "
-                f"Ubuntu install Mesa's EGL: sudo apt-get install {' '.join(EGL_APT_PACKAGES)}; elsewhere pass "
-                "backend=None (platform OpenGL) or see mien.render.offscreen's documentation."
-            ) from error
+        self._open(self.width, self.height, samples, backend)
         with self._ctx:
-            samples = min(samples, self._ctx.max_samples)
             self._program = self._ctx.program(vertex_shader=VERTEX_SHADER, fragment_shader=FRAGMENT_SHADER)
-            for name, (direction, color) in LIGHTS.items():
-                unit = np.asarray(direction, np.float32) / np.linalg.norm(direction)
-                self._program[f"u_{name}_direction"].value = tuple(unit.tolist())
-                self._program[f"u_{name}_color"].value = color
-            size = (self.width, self.height)
-            self._fbo = self._ctx.framebuffer(
-                color_attachments=[self._ctx.renderbuffer(size, 4, samples=samples)],
-                depth_attachment=self._ctx.depth_renderbuffer(size, samples=samples),
-            )
-            self._resolve = (
-                self._ctx.framebuffer(color_attachments=[self._ctx.renderbuffer(size, 4)]) if samples else None
-            )
+            self._light(self._program)
             self._index_buffer = self._ctx.buffer(faces.tobytes())
             # Without paint a 1x1 transparent texture keeps one shader for both cases.
             paint = texture if texture is not None else np.zeros((1, 1, 4), np.float32)
@@ -309,22 +349,5 @@ class OffscreenRenderer:
             self._paint.use(0)
             ctx.clear(*(c / 255.0 for c in self.background), 1.0)
             self._vao.render()
-            source = self._fbo
-            if self._resolve is not None:
-                ctx.copy_framebuffer(self._resolve, self._fbo)
-                source = self._resolve
-            source.read_into(out, components=3)
+            self._read_into(out)
         return out
-
-    def close(self) -> None:
-        """Free the OpenGL context and its buffers (idempotent)."""
-        ctx = getattr(self, "_ctx", None)
-        if ctx is not None:
-            ctx.release()
-            self._ctx = None
-
-    def __enter__(self) -> OffscreenRenderer:
-        return self
-
-    def __exit__(self, *exc_info: object) -> None:
-        self.close()

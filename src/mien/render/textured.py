@@ -24,13 +24,11 @@ from mien.render.camera import Camera
 from mien.render.materials import AlphaMode, Material, TexturedMesh
 from mien.render.offscreen import (
     DEFAULT_BACKGROUND,
-    EGL_APT_PACKAGES,
-    EGLUnavailableError,
+    GLSurface,
     _check_size,
     _require_moderngl,
     vertex_normals,
 )
-from mien.render.shaders import LIGHTS
 from mien.render.textured_shaders import ALPHA_MODE_IDS, fragment_shader, vertex_shader
 
 __all__ = ["TexturedRenderer"]
@@ -60,7 +58,7 @@ def _weld(positions: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.
     return first.astype(np.int64), inverse, np.ascontiguousarray(inverse[triangles], np.int32)
 
 
-class TexturedRenderer:
+class TexturedRenderer(GLSurface):
     """Renders a :class:`TexturedMesh`, frame after frame, into (height, width, 3) uint8 sRGB images.
 
     ``camera`` looks at the mesh in its own frame and unit; ``background`` 8-bit sRGB; ``samples``
@@ -105,17 +103,9 @@ class TexturedRenderer:
             self._weld_triangles = self._triangles
         self._normals = np.empty((n, 3), np.float32)
         moderngl = _require_moderngl()
-        try:
-            self._ctx = moderngl.create_context(standalone=True, **({"backend": backend} if backend else {}))
-        except Exception as error:
-            raise EGLUnavailableError(
-                f"could not create a headless OpenGL context ({type(error).__name__}: {error}). On Debian or "
-                f"Ubuntu install Mesa's EGL: sudo apt-get install {' '.join(EGL_APT_PACKAGES)}; elsewhere pass "
-                "backend=None (platform OpenGL) or see mien.render.offscreen's documentation."
-            ) from error
+        self._open(self.width, self.height, samples, backend)
         ctx = self._ctx
         with ctx:
-            samples = min(samples, ctx.max_samples)
             # Two programs: the alpha test's discard (MASK parts only) would cost the others early depth tests.
             self._programs = {
                 alpha_test: ctx.program(
@@ -124,17 +114,8 @@ class TexturedRenderer:
                 for alpha_test in (False, True)
             }
             for program in self._programs.values():
-                for name, (direction, color) in LIGHTS.items():
-                    unit = np.asarray(direction, np.float32) / np.linalg.norm(direction)
-                    program[f"u_{name}_direction"].value = tuple(unit.tolist())
-                    program[f"u_{name}_color"].value = color
+                self._light(program)
                 program["u_base_color"].value = 0
-            size = (self.width, self.height)
-            self._fbo = ctx.framebuffer(
-                color_attachments=[ctx.renderbuffer(size, 4, samples=samples)],
-                depth_attachment=ctx.depth_renderbuffer(size, samples=samples),
-            )
-            self._resolve = ctx.framebuffer(color_attachments=[ctx.renderbuffer(size, 4)]) if samples else None
             self._textures: dict[int, Any] = {}
             white = np.full((1, 1, 4), 255, np.uint8)
             self._white = self._upload(white, moderngl)
@@ -274,22 +255,5 @@ class TexturedRenderer:
                     self._draw(blended[index])
                 self._fbo.depth_mask = True
                 ctx.disable(ctx.BLEND)
-            source = self._fbo
-            if self._resolve is not None:
-                ctx.copy_framebuffer(self._resolve, self._fbo)
-                source = self._resolve
-            source.read_into(out, components=3)
+            self._read_into(out)
         return out
-
-    def close(self) -> None:
-        """Free the OpenGL context and its buffers (idempotent)."""
-        ctx = getattr(self, "_ctx", None)
-        if ctx is not None:
-            ctx.release()
-            self._ctx = None
-
-    def __enter__(self) -> TexturedRenderer:
-        return self
-
-    def __exit__(self, *exc_info: object) -> None:
-        self.close()
