@@ -266,7 +266,7 @@ def test_gltf_adapter_warns_on_an_undecodable_texture_and_keeps_the_factor(tmp_p
 
     material = {"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "baseColorFactor": [0.5, 0.2, 0.1, 1.0]}}
     path = write_quad_gltf(tmp_path / "broken.gltf", b"not an image at all", "image/png", material)
-    with pytest.warns(TextureDecodeWarning, match=r"broken\.gltf.*texture image 0 \(image/png\)"):
+    with pytest.warns(TextureDecodeWarning, match=r"broken\.gltf: texture image 0 of material .m. \(image/png\)"):
         mesh = textured_mesh_from_gltf(read_gltf(path))
     assert mesh.parts[0].material.base_color_texture is None
     assert mesh.parts[0].material.base_color_factor == (0.5, 0.2, 0.1, 1.0)
