@@ -14,8 +14,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="convert a clip file to another format (.glb, .anim, Live Link CSV, .jsonl...)",
         description="Read INPUT (any format mien reads: .csv curves, Live Link Face or OpenFace CSV, .json, "
         ".jsonl, .npz, .anim, .glb) and write -o OUTPUT in the format its suffix names: .glb (the head with the "
-        "clip as animations of its morph weights and head rotation), .anim (Maya curves), .csv (time_s curves; "
-        "--format arkit_csv for Live Link Face), .json, .jsonl (OpenFACS), .npz. Formats are in docs/FORMATS.md.",
+        "clip as animations of its morph weights and head rotation; with --head face.glb, the user's own file, "
+        "textures and skin kept, its own shapes and head/eye bones animated), .vrm (VRM 1.0: the head with the "
+        "VRM expression presets made from mien's emotion prototypes), .anim (Maya curves), .csv (time_s curves; "
+        "--format arkit_csv for Live Link Face, --names file for the head file's own shape names), .json, .jsonl "
+        "(OpenFACS), .npz. Formats are in docs/FORMATS.md.",
     )
     parser.add_argument("input", type=input_file, help="clip file to read")
     add_output(
@@ -29,8 +32,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_head(
         parser,
         default=None,
-        help="head for .glb: default, builtin or ict, with an optional identity (builtin:b, ict:a); only .glb "
-        "carries a head",
+        help="head for .glb and .vrm: default, builtin or ict, with an optional identity (builtin:b, ict:a), or "
+        "a character file (face.glb, avatar.vrm, file:PATH); with --names file, the head whose shape names a "
+        "Live Link CSV takes",
+    )
+    parser.add_argument(
+        "--names",
+        choices=("arkit", "file"),
+        default="arkit",
+        help="Live Link CSV columns: ARKit's names (default) or the own shape names of the --head character file",
     )
     parser.add_argument("--fps", type=positive_fps, help="resample the clip to this frame rate before writing")
     parser.add_argument("--format", help="output format when several share a suffix (arkit_csv for .csv)")
@@ -45,11 +55,17 @@ def run(args: argparse.Namespace) -> int:
     from mien.exchange import format_for, format_module, reader_for
 
     output_format = format_for(args.output, "write", args.format)
-    carries_head = output_format == "glb"
-    if not carries_head:
-        if args.head is not None or args.identity is not None:
-            spec = ":".join(part for part in (args.head or "default", args.identity) if part)
-            refuse_option("--head", spec, f"{args.output.suffix} carries no head (only .glb does)")
+    carries_head = output_format in ("glb", "vrm")
+    head_spec = ":".join(part for part in (args.head or "default", args.identity) if part)
+    file_names = args.names == "file"
+    if file_names:
+        if output_format != "arkit_csv":
+            refuse_option("--names", args.names, f"only Live Link CSV (--format arkit_csv) has columns to name, "
+                          f"not {output_format}")  # fmt: skip
+        if args.head is None:
+            refuse_option("--names", args.names, "give the character file with --head face.glb")
+    elif not carries_head and (args.head is not None or args.identity is not None):
+        refuse_option("--head", head_spec, f"{args.output.suffix} carries no head (only .glb and .vrm do)")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         clip = reader_for(args.input, args.input_format)(args.input)
@@ -62,12 +78,16 @@ def run(args: argparse.Namespace) -> int:
 
             clip = resample(clip, args.fps)
         write = format_module(output_format).write
-        if carries_head:
+        if carries_head or file_names:
             from mien.heads import load_head
 
             rig = load_head(args.head or "default", args.identity)
-            write(clip, args.output, rig=rig)
-            done = f"on the {rig.name} head"
+            if file_names:
+                write(clip, args.output, rig=rig, names="file")
+                done = f"with the shape names of {rig.name}"
+            else:
+                write(clip, args.output, rig=rig)
+                done = f"on the {rig.name} head"
         else:
             write(clip, args.output)
             done = f"({output_format})"

@@ -19,7 +19,9 @@ AU intensities (``mien import --au``).
 
 Writing: an ARKit weight clip (or a face-channel clip, through the AU mapping on the built-in ARKit
 vocabulary) as the app writes it, starting at timecode ``00:00:00:00.000``, with a 60 fps timecode and the
-sub-frame in milliseconds of a frame (so any clip rate is kept).
+sub-frame in milliseconds of a frame (so any clip rate is kept). With ``names="file"`` and a head read from a
+character file, the blendshape columns are that file's own shape names (``mien export --head face.glb --names
+file``).
 """
 
 from __future__ import annotations
@@ -36,6 +38,7 @@ from mien.facs.arkit import ARKIT_NAMES
 from mien.facs.catalogue import POSE_CHANNELS
 from mien.facs.clip import Clip
 from mien.fileio.streams import Source, TargetT, read_text, refuse_rig, source_name, write_text
+from mien.rig.model import Rig
 
 __all__ = ["COLUMNS", "ROTATION_COLUMNS", "SUFFIXES", "format_timecode", "parse_timecode", "read", "sniff", "write"]
 
@@ -168,16 +171,37 @@ def read(source: Source, timecode_fps: int | None = None) -> Clip:
     return uniform_clip(times, np.stack(columns, axis=1), channels)
 
 
-def write(clip: Clip, target: TargetT, rig: object = None) -> TargetT:
+def write(clip: Clip, target: TargetT, rig: object = None, names: str = "arkit") -> TargetT:
     """Write ``clip`` as a Live Link Face CSV (see the module doc) to a path (atomically) or a binary stream.
 
     ``clip``: ARKit names (weights 0..1) and optional pose channels (degrees), or face channels, which go
-    through the AU -> ARKit mapping. Missing ARKit channels are written as 0.
+    through the AU mapping. Missing ARKit channels are written as 0.
+
+    ``names="file"`` writes the columns under the own shape names of ``rig``, a head read from a character file
+    (``--head face.glb``): one column per file shape its targets are built from, at the weights
+    :mod:`mien.exchange.file_shapes` gives (a tool that maps those names, such as a game engine's pose asset,
+    then plays the clip on that character). Such a file is for that character; this reader reads ARKit columns.
     """
     from mien.rig.face_weights import clip_to_rig, is_weight_clip
 
-    refuse_rig(rig, "Live Link Face .csv")
-    if is_weight_clip(clip, ARKIT_NAMES):
+    if names not in ("arkit", "file"):
+        raise InvalidValueError("names", names, "arkit (Live Link Face's columns) or file (the head file's shapes)")
+    columns: tuple[str, ...] = COLUMNS[:52]
+    if names == "file":
+        from mien.exchange.file_shapes import file_shape_names, shape_weights, source_rows
+
+        if not isinstance(rig, Rig):
+            raise InvalidValueError("names", names, "a head read from a character file to take the names from")
+        rows = source_rows(rig)
+        columns = file_shape_names(rows)
+        bad = next((c for c in columns if any(ch in c for ch in ',"\r\n')), None)
+        if bad is not None:
+            raise InvalidValueError(f"shape name of {rig.name}", bad, "a name without commas, quotes or line breaks")
+        rig_weights, poses = clip_to_rig(clip, rig)
+        shapes = shape_weights(rig_weights, rig.target_names, rows)
+        weights = np.stack([shapes[c] for c in columns], axis=1).astype(np.float64)
+    elif is_weight_clip(clip, ARKIT_NAMES):
+        refuse_rig(rig, "Live Link Face .csv")
         weights = np.zeros((clip.n_frames, 52))
         poses = np.zeros((clip.n_frames, len(POSE_CHANNELS)))
         for j, channel in enumerate(clip.channels):
@@ -186,6 +210,7 @@ def write(clip: Clip, target: TargetT, rig: object = None) -> TargetT:
             else:
                 weights[:, ARKIT_NAMES.index(channel)] = clip.values[:, j]
     else:
+        refuse_rig(rig, "Live Link Face .csv")
         from mien.rig.builtin_head import builtin_head
 
         all_weights, poses = clip_to_rig(clip, builtin_head())
@@ -197,9 +222,10 @@ def write(clip: Clip, target: TargetT, rig: object = None) -> TargetT:
     rotations = np.column_stack(
         [*radians[:, :3].T, radians[:, 3], radians[:, 4], zero, radians[:, 3], radians[:, 4], zero]
     )
-    rows = ["Timecode,BlendShapeCount," + ",".join(COLUMNS)]
+    header = (*columns, *ROTATION_COLUMNS)
+    rows_out = ["Timecode,BlendShapeCount," + ",".join(header)]
     for i, time_s in enumerate(clip.times_s):
         values = ",".join(repr(float(v)) for v in np.concatenate([weights[i], rotations[i]]))
-        rows.append(f"{format_timecode(float(time_s), rate)},{len(COLUMNS)},{values}")
-    write_text("\n".join(rows) + "\n", target)
+        rows_out.append(f"{format_timecode(float(time_s), rate)},{len(header)},{values}")
+    write_text("\n".join(rows_out) + "\n", target)
     return target
