@@ -96,6 +96,19 @@ CASES: list[Case] = [
     case("export", "output under a file", f"export {{d}}/smile.csv -o {UNDER_FILE}.json", "some_file.txt is a file"),
     case("export", "unknown format", "export {d}/smile.csv -o {d}/o.xyz", "'.xyz'"),
     case("export", "option that does not apply", "export {d}/smile.csv -o {d}/o.json --head builtin", "--head"),
+    case("export", "names the head lacks", "export {d}/odd_names.csv -o {d}/o.glb --head builtin", "'fooBar'"),
+    case("export", "missing head file", "export {d}/smile.csv -o {d}/o.glb --head {d}/nohead.glb", "nohead.glb"),
+    case("export", "corrupt head file", "export {d}/smile.csv -o {d}/o.vrm --head {d}/text.glb", "text.glb", "glTF"),
+    case("export", "unsupported head file", "export {d}/smile.csv -o {d}/o.glb --head {d}/face.fbx", "face.fbx"),
+    case("export", "own names, no head", "export {d}/smile.csv -o {d}/o.csv --format arkit_csv --names file", "--head"),
+    case(
+        "export",
+        "own names of a built-in head",
+        "export {d}/smile.csv -o {d}/o.csv --format arkit_csv --names file --head builtin",
+        "'builtin'",
+        "character file",
+    ),
+    case("export", "own names in JSON", "export {d}/smile.csv -o {d}/o.json --names file --head builtin", "--names"),
     # import
     case("import", "typo in a file name", "import {d}/smlie.csv -o {d}/o.npz", "did you mean", "smile.csv"),
     case("import", "empty file", "import {d}/empty.csv -o {d}/o.npz", "empty.csv is empty"),
@@ -245,6 +258,7 @@ def inputs(tmp_path: Path) -> Path:
     (tmp_path / "header_only.csv").write_text("time_s,AU12L,AU12R\n")
     (tmp_path / "nan.csv").write_text("time_s,AU12L\n0,0\n0.5,nan\n1.0,0\n")
     (tmp_path / "unsorted.csv").write_text("time_s,AU12L\n0,0\n1.0,1\n0.5,0\n")
+    (tmp_path / "odd_names.csv").write_text("time_s,fooBar\n0,0\n1.0,1\n")
     (tmp_path / "some_file.txt").write_text("a file, not a folder\n")
     (tmp_path / "clip.mp4").write_bytes(b"\0\0\0\x18ftypmp42" + b"\0" * 64)  # named right; never decoded here
     (tmp_path / "empty.mp4").touch()
