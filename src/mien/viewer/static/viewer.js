@@ -30,6 +30,7 @@ const state = {
   reconnectMs: 500,
   frame: null, // latest decoded frame, applied on the next animation frame
   frameDirty: false,
+  shown: null, // the frame the view last drew (null: none on this head yet)
   lastTick: null,
   ticksSeen: 0,
   head: null, // { root, pivot, poseNode, turnHead, meshes: [{ mesh, map: Int32Array }], names, eyes: [turn] }
@@ -267,6 +268,7 @@ async function loadHead(characterId) {
   state.head = prepareHead(gltf, info);
   scene.add(state.head.pivot);
   state.frameDirty = state.frame !== null;
+  state.shown = null;
   state.needsRender = true;
   const what = info.head_file ? `${info.head_file}, ` : "";
   setStatus(info.head_note || `${characterId}: ${what}${state.head.names.length} morph targets`);
@@ -375,14 +377,26 @@ function applyFrame(frame) {
   }
 }
 
-// Render on demand: only when a new frame, the camera or the window changed (cheap on a laptop's battery).
+/** True when two frames show the same face (weights and pose): a still face is not drawn again. */
+function sameFace(a, b) {
+  if (!a || !b || a.weights.length !== b.weights.length) return false;
+  for (let i = 0; i < a.weights.length; i++) if (a.weights[i] !== b.weights[i]) return false;
+  for (let i = 0; i < 5; i++) if (a.pose[i] !== b.pose[i]) return false;
+  return true;
+}
+
+// Render on demand: only when the face, the camera or the window changed (cheap on a laptop's battery, and a
+// CPU rasteriser drawing a textured avatar is free for the next change as soon as the face is still).
 let fpsCount = 0;
 let fpsSince = performance.now();
 function animate(now) {
   if (state.frameDirty && state.frame) {
-    applyFrame(state.frame);
+    if (!sameFace(state.frame, state.shown)) {
+      applyFrame(state.frame);
+      state.shown = state.head ? state.frame : null;
+      state.needsRender = true;
+    }
     state.frameDirty = false;
-    state.needsRender = true;
     if (state.frame.tick !== state.lastTick) {
       state.lastTick = state.frame.tick;
       $("status-tick").textContent = `tick ${state.frame.tick}  t ${state.frame.timeS.toFixed(2)} s`;
