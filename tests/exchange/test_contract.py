@@ -43,6 +43,7 @@ ROUND_TRIPS: dict[str, tuple[str, float | None, object]] = {
     "maya_anim": ("face", None, {}),  # key reduction: within 0.5 % of each curve's value range
     "arkit_csv": ("weights", 1e-9, {}),
     "glb": ("weights", 1e-3, {}),  # float32 storage: 1e-6 for weights, 1e-3 degree for angles
+    "vrm": ("weights", 1e-3, {}),  # a GLB: as glb
 }
 """How each writable format round-trips. A new writer without an entry fails the test below."""
 
@@ -66,7 +67,7 @@ def test_round_trip_through_every_writer(tmp_path: Path, name: str) -> None:
     suffix = module.SUFFIXES[0]
     path = tmp_path / f"clip{suffix}"
     kwargs = {}
-    if name == "glb":
+    if name in ("glb", "vrm"):
         from mien.rig.builtin_head import builtin_head
 
         kwargs["rig"] = builtin_head()
@@ -90,7 +91,7 @@ def test_non_geometry_formats_refuse_a_head(tmp_path: Path) -> None:
     from mien.rig.builtin_head import builtin_head
 
     for name in ROUND_TRIPS:
-        if name == "glb":
+        if name in ("glb", "vrm"):
             continue
         with pytest.raises(InvalidValueError, match="head"):
             format_module(name).write(face_clip(3), tmp_path / "x", rig=builtin_head())

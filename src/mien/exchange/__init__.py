@@ -14,7 +14,7 @@ their keys). Format modules import only numpy at module level, so the registry i
 dependency is needed only when that format is used.
 
 >>> sorted(readable_suffixes())
-['.anim', '.csv', '.glb', '.json', '.jsonl', '.npz']
+['.anim', '.csv', '.glb', '.json', '.jsonl', '.npz', '.vrm']
 >>> writer_for("face.anim").__module__
 'mien.exchange.maya_anim'
 """

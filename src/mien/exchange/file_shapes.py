@@ -33,7 +33,7 @@ import numpy as np
 from mien.errors import InvalidValueError
 from mien.rig.model import Rig
 
-__all__ = ["file_shape_names", "rig_shape_weights", "shape_weights"]
+__all__ = ["file_shape_names", "rig_shape_weights", "shape_weights", "source_rows"]
 
 SourceRows = Mapping[str, Sequence[tuple[str, float, str]]]
 """Rig target -> ``(file shape, weight, side)`` rows (:attr:`HeadFileInfo.source_names`)."""

@@ -33,10 +33,18 @@ import numpy as np
 from mien.errors import InvalidValueError
 from mien.exchange.glb import document_of, pack_glb
 from mien.facs.clip import Clip
-from mien.fileio.streams import TargetT, write_bytes
+from mien.fileio.streams import Source, TargetT, write_bytes
 from mien.rig.model import Rig
 
-__all__ = ["EXPRESSION_PRESETS", "SUFFIXES", "VRM_META_DEFAULTS", "expression_weights", "vrm_document", "write"]
+__all__ = [
+    "EXPRESSION_PRESETS",
+    "SUFFIXES",
+    "VRM_META_DEFAULTS",
+    "expression_weights",
+    "read",
+    "vrm_document",
+    "write",
+]
 
 SUFFIXES: tuple[str, ...] = (".vrm",)
 """File suffixes of this format."""
@@ -216,3 +224,14 @@ def write(clip: Clip, target: TargetT, rig: Rig | None = None, meta: Mapping[str
     weights, poses = clip_to_rig(clip, rig)
     write_bytes(pack_glb(*vrm_document(rig, weights, poses, clip.fps, meta)), target)
     return target
+
+
+def read(source: Source) -> Clip:
+    """The first animation of a ``.vrm`` (a GLB) as a weight clip, as :func:`mien.exchange.glb.read` reads it.
+
+    The avatar itself (meshes, expressions) is read as a head: ``--head avatar.vrm``
+    (:func:`mien.heads.load_head`).
+    """
+    from mien.exchange.glb import read as read_glb
+
+    return read_glb(source)
