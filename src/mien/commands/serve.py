@@ -30,7 +30,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         metavar="ID",
         help="character id to create at start (repeatable; default: one called 'default')",
     )
-    add_head(parser, help="head of those characters: default, builtin or ict, with an optional identity (ict:b)")
+    add_head(
+        parser,
+        help="head of those characters: default, builtin or ict, with an optional identity (ict:b), or a head file "
+        "(face.glb, .gltf, .vrm, file:PATH), which the viewer shows as itself, textures and all",
+    )
     parser.add_argument("--seed", type=int, default=0, help="seed of the first character (others: +1 each)")
     parser.add_argument("--no-idle", action="store_true", help="switch idle behaviour off")
     parser.add_argument("--check", action="store_true", help="start, print the addresses, then stop (a smoke test)")
