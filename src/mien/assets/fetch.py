@@ -21,6 +21,8 @@ from typing import Any
 
 from mien.errors import InvalidValueError, UnknownNameError
 from mien.fileio.hashing import file_sha256
+from mien.paths import installed_path
+from mien.progress import progress
 
 __all__ = ["CHUNK_BYTES", "SOURCES", "AssetSource", "fetch_asset", "load_sources"]
 
@@ -73,7 +75,6 @@ def _download(url: str, target: Path, show_progress: bool, timeout_s: float, lab
     import urllib.error
     import urllib.request
 
-    from mien.progress import progress
 
     if not re.match(r"(?i)^(https?|file)://", url):
         raise InvalidValueError("url", url, "an http://, https:// or file:// URL")
@@ -137,7 +138,6 @@ def fetch_asset(
     (or no known hash), an archive that is not a zip or lacks the asset, or an existing ``dest``;
     nothing is left behind then.
     """
-    from mien.paths import installed_path
 
     if name not in SOURCES:
         raise UnknownNameError("fetchable asset", name, tuple(SOURCES))

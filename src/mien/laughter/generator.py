@@ -37,6 +37,7 @@ from mien.laughter.library import LaughLibrary
 from mien.laughter.names import CONTROLLER_NAMES
 from mien.laughter.taxonomy import recipe
 from mien.laughter.to_face import controllers_to_face, expression_envelope, smooth
+from mien.plot import pyplot
 
 __all__ = ["MOUTH_CHANNELS", "LaughResult", "face_frame_at", "generate", "plot_result"]
 
@@ -207,7 +208,6 @@ def face_frame_at(result: LaughResult, t_s: float) -> np.ndarray | None:
 
 def plot_result(result: LaughResult, path: str | Path) -> Path:
     """Plot a result's moving controller curves and AU channels (two panels) to a PNG at ``path``."""
-    from mien.plot import pyplot
 
     plt = pyplot()
     path = Path(path)

@@ -24,6 +24,7 @@ import numpy as np
 
 from mien.errors import InvalidValueError, UnknownNameError
 from mien.facs.clip import Clip
+from mien.fileio.container import load_container, save_container
 from mien.laughter.names import CONTROLLER_NAMES, LAUGH_TYPES
 
 __all__ = ["FORMAT_NAME", "FORMAT_VERSION", "LaughLibrary", "LibraryMetadata", "load_library", "utc_now"]
@@ -121,7 +122,6 @@ class LaughLibrary:
             **self.metadata.to_dict(),
         }
         arrays: dict[str, np.ndarray] = {f"curve/{name}": clip.values for name, clip in self.curves.items()}
-        from mien.fileio.container import save_container
 
         save_container(path, FORMAT_NAME, FORMAT_VERSION, meta, arrays)  # atomic: temporary file, then rename
         return path
@@ -147,7 +147,6 @@ def load_library(path: str | Path) -> LaughLibrary:
     path = Path(path)
     if not path.is_file():
         raise InvalidValueError("library", str(path), "an existing .npz library file")
-    from mien.fileio.container import load_container
 
     box = load_container(path)  # corrupt, truncated or foreign files raise naming the file
     meta = box.meta

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from mien.errors import InvalidValueError
+from mien.plot import pyplot
 
 __all__ = ["column_statistics", "format_dtw_table", "plot_dtw_heatmap"]
 
@@ -105,7 +106,6 @@ def plot_dtw_heatmap(
     ``annotate`` writes each value in its cell with ``decimals`` digits. Needs matplotlib (``mien[plot]``).
     """
     values = _check(matrix, labels)
-    from mien.plot import pyplot
 
     plt = pyplot()
     n = values.shape[0]

@@ -37,10 +37,18 @@ import numpy as np
 from mien.errors import InvalidValueError, MienError
 from mien.extras import require
 from mien.facs.clip import Clip, interpolate_frames
+from mien.fileio.container import load_container, save_container
 from mien.fileio.hashing import key_sha256
 from mien.laughter.library import LaughLibrary, LibraryMetadata, utc_now
 from mien.laughter.names import CONTROLLER_NAMES, LAUGH_TYPES
+from mien.learning.clustering import KMedoidsDTW, representative_curve
+from mien.learning.dtw import dtw_distance_matrices_per_channel, dtw_distance_matrix
+from mien.learning.dtw_report import format_dtw_table, plot_dtw_heatmap
+from mien.learning.takes import controllers_from_track
+from mien.paths import require_asset
+from mien.plot import pyplot
 from mien.progress import progress
+from mien.tracking.track import track_video
 
 __all__ = [
     "CHECKPOINT_VERSION",
@@ -193,8 +201,6 @@ class _VideoOutcome:
 def _process_video(job: _VideoJob) -> _VideoOutcome:
     """Track one video and compute controller curves per take (runs in a worker; never raises)."""
     try:
-        from mien.learning.takes import controllers_from_track
-        from mien.tracking.track import track_video
 
         track = track_video(job.video, job.model, show_progress=False)
         clips = controllers_from_track(track, eps=job.eps)
@@ -229,7 +235,6 @@ def _checkpoint_path(work: Path, job: _VideoJob) -> Path:
 
 
 def _save_checkpoint(path: Path, outcome: _VideoOutcome) -> None:
-    from mien.fileio.container import save_container
 
     meta = {"video": outcome.video, "fps": outcome.fps, "error": outcome.error, "n_takes": len(outcome.takes)}
     arrays = {f"take_{i}": values for i, values in enumerate(outcome.takes)}
@@ -237,7 +242,6 @@ def _save_checkpoint(path: Path, outcome: _VideoOutcome) -> None:
 
 
 def _load_checkpoint(path: Path) -> _VideoOutcome | None:
-    from mien.fileio.container import load_container
 
     try:
         box = load_container(path, CHECKPOINT_FORMAT, CHECKPOINT_VERSION)
@@ -253,7 +257,6 @@ def _load_checkpoint(path: Path) -> _VideoOutcome | None:
 
 def _type_dtw(series: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     """(16, n, n) per-controller and (n, n) multivariate DTW matrices of one type's takes."""
-    from mien.learning.dtw import dtw_distance_matrices_per_channel, dtw_distance_matrix
 
     return dtw_distance_matrices_per_channel(series, n_jobs=1), dtw_distance_matrix(series, n_jobs=1)
 
@@ -366,7 +369,6 @@ def learn_library(
         raise InvalidValueError("labels", str(labels), _nothing_usable(skipped))
     model_path = str(Path(model).resolve()) if model is not None else None
     if model_path is None:
-        from mien.paths import require_asset
 
         model_path = str(require_asset("face_landmarker"))
     output = Path(output)
@@ -470,7 +472,6 @@ def _collect_takes(rows: list[LabelRow], outcomes: dict[str, _VideoOutcome]) -> 
 def _representatives(
     by_type: dict[str, list[Take]], matrices: dict[str, tuple[np.ndarray, np.ndarray]], method: str, seed: int
 ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
-    from mien.learning.clustering import KMedoidsDTW, representative_curve
 
     curves: dict[str, np.ndarray] = {}
     extra: dict[str, Any] = {}
@@ -515,7 +516,6 @@ def _summary(result: LearnResult, multivariate: dict[str, np.ndarray]) -> str:
 
 def write_report(result: LearnResult, report_dir: str | os.PathLike[str], multivariate: dict[str, np.ndarray]) -> Path:
     """Write ``summary.txt``, ``dtw_<type>.txt`` tables, heat maps and prototype plots into ``report_dir``."""
-    from mien.learning.dtw_report import format_dtw_table, plot_dtw_heatmap
 
     folder = Path(report_dir)
     folder.mkdir(parents=True, exist_ok=True)
@@ -536,7 +536,6 @@ def write_report(result: LearnResult, report_dir: str | os.PathLike[str], multiv
 
 
 def _plot_prototype(result: LearnResult, type_name: str, path: Path) -> None:
-    from mien.plot import pyplot
 
     plt = pyplot()
     prototype = result.library.curve(type_name)

@@ -7,6 +7,7 @@ import numpy as np
 from mien.errors import InvalidValueError, UnknownNameError
 from mien.facs.catalogue import FACE_CHANNELS
 from mien.facs.clip import Clip
+from mien.rig.driver import RigDriver
 from mien.rig.model import Rig
 
 __all__ = ["face_to_rig"]
@@ -28,7 +29,6 @@ def face_to_rig(
     One implementation with live streaming: this is :class:`mien.rig.driver.RigDriver` compiled for the call
     (keep a driver to map frames tick by tick).
     """
-    from mien.rig.driver import RigDriver
 
     if isinstance(frames, Clip):
         unknown = [name for name in frames.channels if name not in FACE_CHANNELS]

@@ -41,6 +41,8 @@ from typing import Any
 
 from mien.errors import InvalidValueError, UnknownNameError
 from mien.facs.arkit import ARKIT_NAMES
+from mien.facs.catalogue import FACE_CHANNELS
+from mien.rig.mapping import AUMapping
 
 __all__ = [
     "CONVENTION_NAMES",
@@ -191,10 +193,8 @@ def read_overrides(path: str | os.PathLike[str]) -> Overrides:
 @cache
 def _au_targets() -> dict[str, frozenset[str]]:
     """AU name (``AU1``) -> the ARKit targets the shipped AU table drives for it."""
-    from mien.rig.mapping import AUMapping
 
     mapping = AUMapping.default()
-    from mien.facs.catalogue import FACE_CHANNELS
 
     out: dict[str, set[str]] = {}
     for i, channel in enumerate(FACE_CHANNELS):

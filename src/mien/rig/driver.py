@@ -22,6 +22,7 @@ import os
 
 import numpy as np
 
+from mien.affect.basis import feature_target_names
 from mien.errors import InvalidValueError
 from mien.facs.catalogue import FACE_CHANNELS, POSE_CHANNELS
 from mien.rig.feature_points import feature_rooms, limit_moves
@@ -59,7 +60,6 @@ class RigDriver:
         self.target_names = mapping.target_names
         """Weight columns, one per target."""
         self._matrix = np.ascontiguousarray(mapping.matrix, dtype=np.float32)
-        from mien.affect.basis import feature_target_names
 
         names = self.target_names
         columns = [names.index(name) if name in names else -1 for name in feature_target_names()]

@@ -17,6 +17,8 @@ from mien.errors import InvalidValueError
 from mien.facs.arkit import ARKIT_NAMES
 from mien.facs.catalogue import FACE_CHANNELS, POSE_CHANNELS
 from mien.facs.clip import Clip
+from mien.rig.animate import face_to_rig
+from mien.rig.au_solve import AUSolver
 from mien.rig.model import Rig
 
 __all__ = ["clip_to_rig", "is_weight_clip", "weights_to_au"]
@@ -55,7 +57,6 @@ def clip_to_rig(clip: Clip, rig: Rig) -> tuple[np.ndarray, np.ndarray]:
             unknown[0],
             f"face channels (AU1L, AU12R, head_yaw_deg...) or target names of head {rig.name!r} (eyeBlinkLeft...)",
         )
-    from mien.rig.animate import face_to_rig
 
     weights, poses = face_to_rig(rig, clip)
     return np.asarray(weights, np.float32), np.asarray(poses, np.float64)
@@ -67,7 +68,6 @@ def weights_to_au(clip: Clip) -> Clip:
     ``clip`` channels: ARKit names (weights 0..1; missing ones count as 0) and optional pose channels, which
     are kept. AUs the solver does not estimate stay 0.
     """
-    from mien.rig.au_solve import AUSolver
 
     unknown = [c for c in clip.channels if c not in ARKIT_NAMES and c not in POSE_CHANNELS]
     if unknown:

@@ -62,6 +62,8 @@ from functools import cache
 
 import numpy as np
 
+from mien.affect.emotions import BLENDS, EMOTIONS, emotion_vector
+from mien.affect.table1 import broekens_to_rig, table1_rig_vectors
 from mien.errors import InvalidValueError, UnknownNameError
 from mien.fileio.tables import read_table
 from mien.rig.geodesic import EdgeGraph
@@ -313,8 +315,6 @@ def limit_moves(weights: np.ndarray, rooms: np.ndarray, out: np.ndarray | None =
 def design_moves(rooms: np.ndarray | None = None) -> np.ndarray:
     """(18,) float64 metres: per feature the largest anchor move at :data:`DESIGN_INTENSITY` over Broekens' six
     emotions and four blends, each limited by ``rooms`` (2, 54) when given."""
-    from mien.affect.emotions import BLENDS, EMOTIONS, emotion_vector
-    from mien.affect.table1 import table1_rig_vectors
 
     vectors = table1_rig_vectors()
     moves = np.stack(
@@ -626,7 +626,6 @@ def table1_weights(vectors_zxy: np.ndarray, intensity: float = 1.0) -> dict[str,
         raise InvalidValueError("vectors_zxy", vectors.shape, f"({len(FEATURE_NAMES)}, 3) finite [z, x, y] metres")
     if not np.isfinite(intensity):
         raise InvalidValueError("intensity", intensity, "a finite number")
-    from mien.affect.table1 import broekens_to_rig
 
     rig_vectors = broekens_to_rig(vectors) * float(intensity)
     return {

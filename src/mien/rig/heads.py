@@ -23,7 +23,7 @@ from typing import Protocol
 from mien.errors import InvalidValueError, UnknownNameError
 from mien.paths import asset_path
 from mien.rig.builtin_head import BUILTIN_IDENTITIES, builtin_head
-from mien.rig.files.head import FILE_SUFFIXES, load_head_file
+from mien.rig.files.head import FILE_SUFFIXES, is_head_file, load_head_file
 from mien.rig.ict_facekit import ict_identity_presets, ict_missing_files, load_ict_facekit
 from mien.rig.model import Rig
 
@@ -135,7 +135,6 @@ def parse_head_spec(spec: str) -> tuple[str, str | None]:
     """``"HEAD[:IDENTITY]"`` -> ``(head, identity or None)``; the head must be one of :data:`HEADS`."""
     if not isinstance(spec, str) or not spec.strip():
         raise InvalidValueError("head", spec, f"HEAD[:IDENTITY] with HEAD one of {', '.join(HEADS)}")
-    from mien.rig.files.head import is_head_file
 
     if spec.startswith("file:"):
         return "file", spec[len("file:") :]

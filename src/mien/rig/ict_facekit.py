@@ -39,6 +39,7 @@ import numpy as np
 
 from mien.errors import InvalidValueError, MissingAssetError
 from mien.facs.arkit import ARKIT_NAMES
+from mien.fileio.container import load_container, save_container
 from mien.fileio.hashing import key_sha256
 from mien.paths import cache_dir, require_asset
 from mien.progress import progress
@@ -369,7 +370,6 @@ def load_ict_facekit(
     arrays: dict[str, np.ndarray] | None = None
     cache_file = ict_cache_file(folder) if cache else None
     if cache_file is not None and cache_file.is_file():
-        from mien.fileio.container import load_container
 
         try:
             arrays = load_container(cache_file, _CACHE_FORMAT, _CACHE_FORMAT_VERSION).arrays
@@ -378,7 +378,6 @@ def load_ict_facekit(
     if arrays is None:
         arrays = _parse(model)
         if cache_file is not None:
-            from mien.fileio.container import save_container
 
             save_container(cache_file, _CACHE_FORMAT, _CACHE_FORMAT_VERSION, {"model": str(model)}, arrays, False)
     return _build(arrays, coeffs, "ict-facekit")

@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from mien.errors import InvalidValueError
+from mien.facs.arkit import ARKIT_NAMES
 from mien.rig.model import Rig
 
 __all__ = [
@@ -114,7 +115,6 @@ def flipped_triangles(
 def max_target_strain(rig: Rig, names: tuple[str, ...] | None = None, region: str | None = "skin") -> tuple[str, float]:
     """``(name, strain)`` of the target (default: the 52 ARKit ones the rig has) with the largest
     :func:`max_edge_strain` at weight 1: the head's own most extreme artist-made shape."""
-    from mien.facs.arkit import ARKIT_NAMES
 
     names = tuple(n for n in (names or ARKIT_NAMES) if n in rig.target_names)
     if not names:

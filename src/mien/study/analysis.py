@@ -33,7 +33,9 @@ import numpy as np
 
 from mien.errors import InvalidValueError, UnknownNameError
 from mien.extras import require
+from mien.fileio.hashing import file_sha256
 from mien.study.anova import AnovaTable, rm_anova
+from mien.study.protocol import BROEKENS_LABELS
 from mien.study.quality import LABEL_PREFIX, label_intensity, label_question, quality_table
 
 if TYPE_CHECKING:
@@ -302,7 +304,6 @@ def _default_factors(frame: pd.DataFrame, protocol: str) -> tuple[list[str], lis
 
 def _label_order(questions: Sequence[str]) -> list[str]:
     """Label questions in the rating form's order (:data:`mien.study.protocol.BROEKENS_LABELS`), others after."""
-    from mien.study.protocol import BROEKENS_LABELS
 
     preferred = [LABEL_PREFIX + name for name, _ in BROEKENS_LABELS]
     present = set(questions)
@@ -449,6 +450,5 @@ def analyze_csv(path: str | os.PathLike[str], design_factors: Sequence[str] | No
         raise InvalidValueError(
             "answers CSV", str(file), f"a CSV file written by 'mien study export' ({reason})"
         ) from None
-    from mien.fileio.hashing import file_sha256
 
     return analyze(frame, design_factors, source=str(file), source_sha256=file_sha256(file), _from_csv=True)

@@ -38,9 +38,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from mien.affect.emotions import MAX_INTENSITY, STUDY_EXPRESSIONS
-from mien.errors import InvalidValueError, MienError, UnknownNameError
+from mien.affect.emotions import MAX_INTENSITY, STUDY_EXPRESSIONS, known_names, resolve_emotion
+from mien.errors import InvalidValueError, MienError, MissingAssetError, UnknownNameError
+from mien.laughter.taxonomy import LAUGH_TYPES, TAXONOMY
 from mien.render.camera import STUDY_ANGLES
+from mien.rig.heads import HEADS
 
 __all__ = [
     "BROEKENS_EXPRESSIONS",
@@ -228,7 +230,6 @@ def _text(path: Path, key: str, value: Any) -> str:
 
 
 def _expression(path: Path, key: str, name: str) -> str:
-    from mien.affect.emotions import known_names, resolve_emotion
 
     try:
         canonical = resolve_emotion(name)
@@ -238,7 +239,6 @@ def _expression(path: Path, key: str, name: str) -> str:
 
 
 def _laughter_type(path: Path, key: str, name: str) -> str:
-    from mien.laughter.taxonomy import LAUGH_TYPES
 
     if name not in LAUGH_TYPES:
         raise UnknownNameError(f"laughter type in {path} {key}", name, LAUGH_TYPES)
@@ -248,7 +248,6 @@ def _laughter_type(path: Path, key: str, name: str) -> str:
 def _head(path: Path, spec: str) -> tuple[str, str]:
     """``"ict:a"`` -> ("ict", "a"); ``"default"`` -> ("default", ""). Checks the head name only (identities
     are checked when a head is loaded, which needs its assets)."""
-    from mien.rig.heads import HEADS
 
     name, _, identity = spec.partition(":")
     if name not in HEADS:
@@ -301,7 +300,6 @@ def _rendered_broekens(path: Path, s: dict[str, Any]) -> list[tuple[str, dict[st
 
 
 def _rendered_mascaro(path: Path, s: dict[str, Any]) -> list[tuple[str, dict[str, Any]]]:
-    from mien.laughter.taxonomy import LAUGH_TYPES, TAXONOMY
 
     types = _string_list(path, "stimuli.laughter_types", s.get("laughter_types"), LAUGH_TYPES)
     types = tuple(_laughter_type(path, "stimuli.laughter_types", t) for t in types)
@@ -420,7 +418,6 @@ def load_design(path: str | Path) -> Design:
     :class:`~mien.errors.InvalidValueError` / :class:`~mien.errors.UnknownNameError` naming the file and key
     for anything malformed or unknown.
     """
-    from mien.errors import MissingAssetError
 
     path = Path(path)
     try:

@@ -25,7 +25,18 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from mien.affect.emotions import resolve_emotion
+from mien.errors import InvalidValueError, MienError, UnknownNameError
 from mien.extras import available
+from mien.facs.arkit import ARKIT_NAMES
+from mien.paths import require_asset
+from mien.progress import progress as progress_bar
+from mien.study.stimuli import MANIFEST_NAME, load_manifest
+from mien.tracking.video import iter_frames
+from mien.validate.detector import EMOTION_LABELS
+from mien.validate.expressions import expected_labels
+from mien.validate.face_detector import FaceDetector
+from mien.validate.scores import Stimulus
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -65,7 +76,6 @@ class MachineJudgement:
         """
         import pandas as pd
 
-        from mien.validate.expressions import expected_labels
 
         rows = []
         for expression in dict.fromkeys(s.stimulus.expression for s in self.result.scores):
@@ -94,8 +104,6 @@ def machine_unavailable(
     landmarker: str | os.PathLike[str] | None = None, emotion_model: str | os.PathLike[str] | None = None
 ) -> str:
     """Why the machine judgement cannot run here (a model not configured or not found), or ``""`` when it can."""
-    from mien.errors import MienError
-    from mien.paths import require_asset
 
     try:
         require_asset("face_landmarker", landmarker)
@@ -108,8 +116,6 @@ def machine_unavailable(
 
 
 def _canonical(expression: str) -> str:
-    from mien.affect.emotions import resolve_emotion
-    from mien.errors import UnknownNameError
 
     try:
         return resolve_emotion(expression)
@@ -118,7 +124,6 @@ def _canonical(expression: str) -> str:
 
 
 def _stimulus(entry: dict[str, Any]) -> Any:
-    from mien.validate.scores import Stimulus
 
     conditions = entry.get("conditions", {}) or {}
     view = str(conditions.get("view", conditions.get("laughter_type", "")))
@@ -142,8 +147,6 @@ def _moving(names: tuple[str, ...]) -> np.ndarray:
 
 def _peak(path: Path, detector: Detector, sample_s: float) -> tuple[float, Any]:
     """``(time_s, detection)`` of the frame that moved most from the first sampled one."""
-    from mien.facs.arkit import ARKIT_NAMES
-    from mien.tracking.video import iter_frames
 
     mask = _moving(tuple(ARKIT_NAMES))
     rest: np.ndarray | None = None
@@ -186,10 +189,6 @@ def judge_stimuli(
     Raises :class:`~mien.errors.MissingAssetError` for a missing manifest, video or model, and
     :class:`~mien.errors.InvalidValueError` naming a video that changed or does not decode.
     """
-    from mien.errors import InvalidValueError
-    from mien.progress import progress as progress_bar
-    from mien.study.stimuli import MANIFEST_NAME, load_manifest
-    from mien.validate.detector import EMOTION_LABELS
     from mien.validate.scores import RecognitionResult, StimulusScore
 
     if not (np.isfinite(sample_s) and sample_s > 0):
@@ -198,8 +197,6 @@ def judge_stimuli(
     manifest = load_manifest(folder, verify=True)
     own = detector is None
     if detector is None:
-        from mien.paths import require_asset
-        from mien.validate.face_detector import FaceDetector
 
         require_asset("face_landmarker", landmarker)
         require_asset("emotion_model", emotion_model)

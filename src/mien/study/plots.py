@@ -23,6 +23,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from mien.fileio.streams import atomic_path
+from mien.plot import pyplot
+from mien.study.quality import paper_table4, table_frame
 
 if TYPE_CHECKING:
     from mien.study.analysis import StudyAnalysis
@@ -31,7 +33,6 @@ __all__ = ["plot_interactions", "plot_mascaro", "plot_naturalness", "plot_profil
 
 
 def _save(figure: Any, path: str | os.PathLike[str]) -> Path:
-    from mien.plot import pyplot
 
     target = Path(path)
     figure.tight_layout()
@@ -47,7 +48,6 @@ def _short(question: str) -> str:
 
 def plot_profile(analysis: StudyAnalysis, path: str | os.PathLike[str]) -> Path:
     """Heatmap of the mean rating (1..5) of every label (columns) for every expression (rows)."""
-    from mien.plot import pyplot
 
     if analysis.profile is None:
         raise ValueError("plot_profile needs a Broekens analysis (rating profile)")
@@ -77,8 +77,6 @@ def plot_profile(analysis: StudyAnalysis, path: str | os.PathLike[str]) -> Path:
 
 def plot_quality(analysis: StudyAnalysis, path: str | os.PathLike[str]) -> Path:
     """Bars of quality per expression: one panel for all conditions (the paper's Table 4 beside), one per factor."""
-    from mien.plot import pyplot
-    from mien.study.quality import paper_table4
 
     if analysis.quality is None:
         raise ValueError("plot_quality needs a Broekens analysis (quality table)")
@@ -118,7 +116,6 @@ def plot_quality(analysis: StudyAnalysis, path: str | os.PathLike[str]) -> Path:
 
 def plot_naturalness(analysis: StudyAnalysis, path: str | os.PathLike[str]) -> Path:
     """Mean naturalness (1..5) per expression with t-based 95% intervals over participants."""
-    from mien.plot import pyplot
 
     if analysis.naturalness is None:
         raise ValueError("plot_naturalness needs a Broekens analysis")
@@ -139,7 +136,6 @@ def plot_naturalness(analysis: StudyAnalysis, path: str | os.PathLike[str]) -> P
 def plot_interactions(analysis: StudyAnalysis, measure: str, path: str | os.PathLike[str]) -> Path:
     """Interaction plots of ``measure``: for each pair of the ANOVA's factors, its mean over participants per
     level of the first (x) with one line per level of the second (one factor: a single line)."""
-    from mien.plot import pyplot
 
     if analysis.trials is None or measure not in analysis.trials.columns:
         raise ValueError(f"no measure {measure!r} in the analysis")
@@ -176,7 +172,6 @@ def plot_interactions(analysis: StudyAnalysis, measure: str, path: str | os.Path
 
 
 def _paper_mascaro() -> Any:
-    from mien.study.quality import table_frame
 
     return table_frame("mien.study", "data/mascaro_fig10.csv")
 
@@ -184,7 +179,6 @@ def _paper_mascaro() -> Any:
 def plot_mascaro(analysis: StudyAnalysis, path: str | os.PathLike[str]) -> Path:
     """Bars of the two questions' means (0..5) per laughter type with 95% intervals; the paper's means as
     black diamonds where its text gives them (``data/mascaro_fig10.csv``)."""
-    from mien.plot import pyplot
 
     if analysis.mascaro is None:
         raise ValueError("plot_mascaro needs a Mascaro analysis")

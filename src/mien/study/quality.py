@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mien.affect.emotions import resolve_emotion
 from mien.errors import UnknownNameError
 from mien.fileio.tables import read_table
 
@@ -59,7 +60,6 @@ def label_question(expression: str) -> str:
     >>> label_question("afraid")
     'label:fear'
     """
-    from mien.affect.emotions import resolve_emotion
 
     try:
         return LABEL_PREFIX + resolve_emotion(expression)

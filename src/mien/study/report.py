@@ -20,8 +20,15 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from mien.errors import MienError
+from mien.fileio.hashing import file_sha256
 from mien.fileio.streams import write_text
 from mien.htmlpage import STYLE, img, library_versions, num, pct, table
+from mien.study import plots
+from mien.study.machine import judge_stimuli, machine_unavailable
+from mien.study.quality import paper_table4
+from mien.study.stimuli import MANIFEST_NAME
+from mien.version import __version__
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -88,7 +95,6 @@ _ANOVA_HEADER = ["measure", "effect", "df", "F", "p", "p (GG)", "eps (GG)", "ng2
 
 
 def _quality_section(analysis: StudyAnalysis, figures: dict[str, Path]) -> str:
-    from mien.study.quality import paper_table4
 
     assert analysis.quality is not None and analysis.profile is not None and analysis.naturalness is not None
     quality = analysis.quality
@@ -204,7 +210,6 @@ def _machine_section(analysis: StudyAnalysis, machine: MachineJudgement | str | 
     if isinstance(machine, str):
         lines.append(f"<p>Not run: {_text(machine)}</p>")
         return "\n".join(lines)
-    from mien.study.quality import paper_table4
 
     paper = paper_table4().set_index("expression")["quality"]
     human: dict[str, float] = {}
@@ -252,7 +257,6 @@ def _machine_section(analysis: StudyAnalysis, machine: MachineJudgement | str | 
 
 
 def _provenance(analysis: StudyAnalysis, machine: MachineJudgement | str | None) -> dict[str, Any]:
-    from mien.version import __version__
 
     info: dict[str, Any] = {
         "mien": __version__,
@@ -264,7 +268,6 @@ def _provenance(analysis: StudyAnalysis, machine: MachineJudgement | str | None)
         "date": time.strftime("%Y-%m-%d %H:%M:%S %Z"),
     }
     if machine is not None and not isinstance(machine, str):
-        from mien.fileio.hashing import file_sha256
 
         info["detector"] = machine.result.detector
         info["models"] = {
@@ -315,7 +318,6 @@ def render_report(
 
 
 def _figures(analysis: StudyAnalysis, folder: Path) -> dict[str, Path]:
-    from mien.study import plots
 
     folder.mkdir(parents=True, exist_ok=True)
     out: dict[str, Path] = {}
@@ -370,9 +372,6 @@ def _judge(
     emotion_model: str | os.PathLike[str] | None,
     progress: bool,
 ) -> MachineJudgement | str:
-    from mien.errors import MienError
-    from mien.study.machine import judge_stimuli, machine_unavailable
-    from mien.study.stimuli import MANIFEST_NAME
 
     if not (stimuli / MANIFEST_NAME).is_file():
         return f"no {MANIFEST_NAME} in {stimuli} (run `mien study stimuli DESIGN.toml`, or pass --stimuli)"

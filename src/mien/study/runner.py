@@ -32,7 +32,10 @@ from collections.abc import AsyncIterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from mien.errors import InvalidValueError
 from mien.extras import require
+from mien.study.protocol import participant_plan, questions
+from mien.study.storage import StorageUnavailableError
 
 if TYPE_CHECKING:
     from fastapi import FastAPI
@@ -79,8 +82,6 @@ def create_app(design: "Design", manifest: dict[str, Any], stimuli_folder: str |
     from fastapi.staticfiles import StaticFiles
     from pydantic import BaseModel, Field
 
-    from mien.study.protocol import participant_plan, questions
-    from mien.study.storage import StorageUnavailableError
 
     folder = Path(stimuli_folder).resolve()
     entries = {entry["id"]: entry for entry in manifest["stimuli"]}
@@ -273,7 +274,6 @@ def listen(host: str = "127.0.0.1", port: int = 8000) -> socket.socket:
 
     Raises :class:`~mien.errors.InvalidValueError` naming the port when it is taken or cannot be bound.
     """
-    from mien.errors import InvalidValueError
 
     if not 0 <= port <= 65535:
         raise InvalidValueError("--http-port", port, "a TCP port 0..65535")

@@ -23,10 +23,17 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from mien.character import Character
 from mien.errors import InvalidValueError, MissingAssetError
 from mien.extras import require
 from mien.fileio.hashing import file_sha256
 from mien.fileio.streams import atomic_path, write_text
+from mien.heads import load_head
+from mien.progress import progress as progress_bar
+from mien.render.camera import View
+from mien.render.clip_render import iter_frames, make_renderer
+from mien.render.video import Mp4Writer
+from mien.rig.animate import face_to_rig
 
 if TYPE_CHECKING:
     import numpy as np
@@ -120,7 +127,6 @@ class _Scenes:
         self._renderer: Any = None
 
     def rig(self, head: str, identity: str, basis: str) -> Any:
-        from mien.heads import load_head
 
         key = (head, identity, basis)
         if key not in self._rigs:
@@ -128,8 +134,6 @@ class _Scenes:
         return self._rigs[key]
 
     def renderer(self, rig_key: tuple[str, str, str], view: str, distance_m: float) -> Any:
-        from mien.render.camera import View
-        from mien.render.clip_render import make_renderer
 
         key = (*rig_key, view, distance_m)
         if key != self._key:
@@ -147,7 +151,6 @@ class _Scenes:
 
 def _face_clip(design: Design, spec: StimulusSpec) -> tuple[Any, np.ndarray | None]:
     """(face Clip, feature weights or None) of a rendered stimulus."""
-    from mien.character import Character
 
     if design.protocol == "mascaro":
         character = Character(seed=design.seed)
@@ -162,9 +165,6 @@ def _face_clip(design: Design, spec: StimulusSpec) -> tuple[Any, np.ndarray | No
 
 
 def _render(design: Design, spec: StimulusSpec, scenes: _Scenes, video: Path) -> tuple[float, float]:
-    from mien.render.clip_render import iter_frames
-    from mien.render.video import Mp4Writer
-    from mien.rig.animate import face_to_rig
 
     conditions = spec.conditions
     head = str(conditions.get("head", "default"))
@@ -198,7 +198,6 @@ def make_stimuli(
     :class:`~mien.errors.InvalidValueError` naming the file; all are checked before anything is written).
     ``on_stimulus(id, skipped)`` is called after each stimulus.
     """
-    from mien.progress import progress as progress_bar
 
     folder = Path(out) if out is not None else design.path.parent / "stimuli"
     supplied: dict[str, tuple[float, float]] = {}

@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 from mien.errors import InvalidValueError, MienError
 from mien.extras import require
+from mien.study.design import BROEKENS_FACTORS, MASCARO_FACTORS
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -490,7 +491,6 @@ class Store:
         nullable Int64. Rows sorted by study, participant, position and on-screen question order."""
         import pandas as pd
 
-        from mien.study.design import BROEKENS_FACTORS, MASCARO_FACTORS
 
         sa = self._sa
         answers, stimuli, participants = self.tables["answers"], self.tables["stimuli"], self.tables["participants"]

@@ -30,6 +30,7 @@ import numpy as np
 from mien.errors import InvalidValueError
 from mien.facs.arkit import ARKIT_NAMES
 from mien.facs.clip import resample_on_times
+from mien.fileio.container import load_container, save_container
 from mien.fileio.hashing import file_sha256, key_sha256
 from mien.fileio.streams import write_text
 from mien.paths import cache_dir, require_asset
@@ -167,7 +168,6 @@ class Track:
         ``.json`` (NaN as null); returns the path."""
         out = Path(path)
         if out.suffix == ".npz":
-            from mien.fileio.container import save_container
 
             save_container(out, TRACK_FORMAT, TRACK_FORMAT_VERSION, self.meta(), self.arrays())
         elif out.suffix == ".json":
@@ -193,7 +193,6 @@ def load_track(path: str | os.PathLike[str]) -> Track:
     file = Path(path)
     try:
         if file.suffix == ".npz":
-            from mien.fileio.container import load_container
 
             box = load_container(file, TRACK_FORMAT, TRACK_FORMAT_VERSION)
             meta, arrays = box.meta, box.arrays

@@ -20,7 +20,6 @@ Every failure raises :class:`~mien.rig.files.errors.HeadFileError` naming the fi
 from __future__ import annotations
 
 import base64
-import json
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from mien.extras import require
+from mien.fileio.glb import MAGIC, GlbError, dequantize, parse_json, read_accessor, unpack_glb
 from mien.rig.files.errors import HeadFileError
 
 __all__ = ["SUPPORTED_EXTENSIONS", "GltfNode", "GltfPrimitive", "GltfScene", "read_gltf"]
@@ -57,18 +57,6 @@ SUPPORTED_EXTENSIONS: frozenset[str] = frozenset(
     }
 )
 """Extensions a file may *require* and still load (material-only ones only change looks, which mien ignores)."""
-
-_DTYPES: dict[int, Any] = {
-    5120: np.int8,
-    5121: np.uint8,
-    5122: np.int16,
-    5123: np.uint16,
-    5125: np.uint32,
-    5126: np.float32,
-}
-_WIDTH: dict[str, int] = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
-_NORMALIZE: dict[int, float] = {5120: 127.0, 5121: 255.0, 5122: 32767.0, 5123: 65535.0}
-
 
 @dataclass(frozen=True, eq=False)
 class GltfNode:
@@ -206,51 +194,18 @@ class _Reader:
         self._views[index] = data
         return data
 
-    def _strided(self, view_index: int, offset: int, dtype: Any, width: int, count: int) -> np.ndarray:
-        data = self.view(view_index)
-        stride = self.gltf.bufferViews[view_index].byteStride or 0
-        item = np.dtype(dtype).itemsize * width
-        ext = (self.gltf.bufferViews[view_index].extensions or {}).get("EXT_meshopt_compression")
-        if ext is not None:
-            stride = int(ext["byteStride"])
-        stride = stride or item
-        need = offset + stride * (count - 1) + item if count else 0
-        if need > len(data):
-            raise self.fail(f"accessor data runs past bufferView {view_index} ({need} > {len(data)} bytes)")
-        raw = np.frombuffer(data, np.uint8)
-        rows = np.lib.stride_tricks.as_strided(raw[offset:], shape=(count, item), strides=(stride, 1))
-        return np.ascontiguousarray(rows).view(dtype).reshape(count, width)
+    def _stride(self, view_index: int) -> int:
+        view = self.gltf.bufferViews[view_index]
+        meshopt_ext = (view.extensions or {}).get("EXT_meshopt_compression")
+        return int(meshopt_ext["byteStride"]) if meshopt_ext is not None else int(view.byteStride or 0)
 
     def accessor(self, index: int, as_float: bool = True) -> np.ndarray:
         """(count, width) array of accessor ``index``: floats (dequantized) or raw integers."""
         try:
-            acc = self.gltf.accessors[index]
-        except (IndexError, TypeError):
-            raise self.fail(f"accessor {index} does not exist") from None
-        if acc.componentType not in _DTYPES or acc.type not in _WIDTH:
-            raise self.fail(f"accessor {index} has componentType {acc.componentType} / type {acc.type}")
-        dtype, width, count = _DTYPES[acc.componentType], _WIDTH[acc.type], int(acc.count)
-        if acc.bufferView is not None:
-            values = self._strided(acc.bufferView, int(acc.byteOffset or 0), dtype, width, count)
-        else:
-            values = np.zeros((count, width), dtype)
-        if acc.sparse is not None:
-            sparse = acc.sparse
-            ids = self._strided(
-                sparse.indices.bufferView, int(sparse.indices.byteOffset or 0), _DTYPES[sparse.indices.componentType],
-                1, int(sparse.count),
-            )[:, 0].astype(np.int64)  # fmt: skip
-            patch = self._strided(sparse.values.bufferView, int(sparse.values.byteOffset or 0), dtype, width,
-                                  int(sparse.count))  # fmt: skip
-            if ids.size and (ids.min() < 0 or ids.max() >= count):
-                raise self.fail(f"accessor {index}: sparse indices outside 0..{count - 1}")
-            values = values.copy()
-            values[ids] = patch
-        if not as_float:
-            return values
-        if acc.normalized and acc.componentType in _NORMALIZE:
-            return np.maximum(values.astype(np.float32) / np.float32(_NORMALIZE[acc.componentType]), -1.0)
-        return values.astype(np.float32)
+            values = read_accessor(self.gltf.document, index, self.view, str(self.path), self._stride)
+        except GlbError as exc:
+            raise self.fail(exc.problem) from None
+        return dequantize(values, self.gltf.document["accessors"][index]) if as_float else values
 
 
 class _View:
@@ -266,6 +221,11 @@ class _View:
     def __init__(self, data: dict[str, Any]) -> None:
         self._data = data
         self._cache: dict[str, Any] = {}
+
+    @property
+    def document(self) -> dict[str, Any]:
+        """The JSON object this view reads."""
+        return self._data
 
     def __getattr__(self, name: str) -> Any:
         if name.startswith("_"):
@@ -290,31 +250,11 @@ def _load_document(path: Path) -> tuple[Any, bytes | None]:
     if not path.is_file():
         raise HeadFileError(path, "no such file")
     data = path.read_bytes()
-    blob: bytes | None = None
-    if data[:4] == b"glTF":
-        if len(data) < 20:
-            raise HeadFileError(path, "truncated: shorter than a GLB header")
-        declared = int.from_bytes(data[8:12], "little")
-        if declared > len(data):
-            raise HeadFileError(path, f"truncated: the GLB header says {declared} bytes, the file has {len(data)}")
-        chunks: dict[bytes, bytes] = {}
-        at = 12
-        while at + 8 <= declared:
-            length, kind = int.from_bytes(data[at : at + 4], "little"), data[at + 4 : at + 8]
-            if at + 8 + length > declared:
-                raise HeadFileError(path, f"truncated: chunk {kind!r} at byte {at} runs past the end")
-            chunks.setdefault(kind, data[at + 8 : at + 8 + length])
-            at += 8 + length
-        if b"JSON" not in chunks:
-            raise HeadFileError(path, "corrupt GLB: no JSON chunk")
-        text, blob = chunks[b"JSON"], chunks.get(b"BIN\x00")
-    else:
-        text = data
     try:
-        document = json.loads(text.decode("utf-8"))
-    except (UnicodeDecodeError, ValueError) as exc:
-        raise HeadFileError(path, f"not a readable glTF 2.0 file (its JSON does not parse: {exc})") from None
-    if not isinstance(document, dict) or not str((document.get("asset") or {}).get("version", "")).startswith("2"):
+        document, blob = unpack_glb(data, str(path)) if data[:4] == MAGIC else (parse_json(data, str(path)), None)
+    except GlbError as exc:
+        raise HeadFileError(path, exc.problem) from None
+    if not str((document.get("asset") or {}).get("version", "")).startswith("2"):
         raise HeadFileError(path, "not a glTF 2.0 file (asset.version is not 2.x)")
     return _View(document), blob
 

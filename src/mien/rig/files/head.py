@@ -34,6 +34,7 @@ from mien.extras import available
 from mien.rig.conventions import NameMatch, Overrides, match_names, read_overrides
 from mien.rig.files.errors import HeadFileError, HeadFileWarning, NoMorphTargetsError
 from mien.rig.model import MorphTarget, Rig
+from mien.rig.obj import read_obj, read_obj_vertices
 from mien.rig.topology import vertex_components
 
 __all__ = ["FILE_SUFFIXES", "FileRig", "HeadFileInfo", "PrimitiveMaterial", "is_head_file", "load_head_file"]
@@ -433,7 +434,6 @@ def _skin_pose(gltf: Any, scene: Any) -> str:
 
 
 def _obj_parts(folder: Path, neutral: str | None) -> list[_Part]:
-    from mien.rig.obj import read_obj, read_obj_vertices
 
     files = sorted(folder.glob("*.obj"))
     if not files:
