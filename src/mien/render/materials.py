@@ -235,7 +235,8 @@ def textured_mesh_from_gltf(
 
 
 def textured_mesh_from_rig(rig: object) -> tuple[TexturedMesh, np.ndarray] | None:
-    """A head file's drawn parts as a :class:`TexturedMesh` over the rig's vertices, or None for other rigs.
+    """A head file's drawn parts as a :class:`TexturedMesh` over the rig's vertices; None for mien's own heads and
+    for a file with no look of its own (no texture, default white: skin, eyes and face paint as on mien's heads).
 
     Returns ``(mesh, gather)``: ``gather`` (k,) int32 picks, for each of the mesh's (unwelded) vertices, its rig
     vertex, so a deformed rig ``vertices[gather]`` is the mesh at that frame. Textures are decoded once per
@@ -243,6 +244,9 @@ def textured_mesh_from_rig(rig: object) -> tuple[TexturedMesh, np.ndarray] | Non
     """
     if not isinstance(rig, FileRig) or rig.info is None or not rig.info.materials:
         return None
+    white = (1.0, 1.0, 1.0, 1.0)
+    if all(not drawn.base_color_image and drawn.base_color_factor == white for drawn in rig.info.materials):
+        return None  # the file says nothing of its look (no textures, default white): drawn as mien's own heads
     decoded: dict[int, Material] = {}
     positions, uvs, parts, gathers = [], [], [], []
     offset = 0
