@@ -9,7 +9,10 @@ own morph targets, named by :attr:`HeadView.frame_names` (the viewer sets every 
 so a shape on the head and the teeth moves both). The rig's weights (mien's ARKit names) become the file's by one
 matrix built once from the rows each rig target was made of (``info.source_names``: file shape, weight, side)::
 
-    file weight = clip(sum over rows of rig weight * row weight * (1/2 for a one-side row), 0, 1)
+    file weight = clip(sum over rows of rig weight * row weight * (1/2 for a one-side row), 0, MAX_GAIN)
+
+The rows carry the gains :mod:`mien.heads.amplitude` put on a timid shape, so a file weight may pass 1 (up to
+:data:`~mien.heads.amplitude.MAX_GAIN`): three.js extrapolates a morph target past 1 as mien's renderer does.
 
 A row with a side is one half of a both-sided file shape split at the midline; half of each side's weight is the
 least-squares single weight of the whole shape (both sides at 1 give 1). A VRM expression (``happy``, ``aa``) the
@@ -29,6 +32,7 @@ from urllib.parse import unquote
 
 import numpy as np
 
+from mien.heads.amplitude import MAX_GAIN
 from mien.rig.model import Rig
 
 __all__ = ["HeadView", "frame_weights", "head_view", "referenced_files"]
@@ -62,7 +66,7 @@ class HeadView:
     frame_names: tuple[str, ...]
     """Names of the frame's weights, in order: the rig's targets, or the file's own morph-target names."""
     matrix: np.ndarray | None
-    """(n_frame_names, n_rig_targets) float32: rig weights -> frame weights (clipped 0..1); None = the rig's own."""
+    """(n_frame_names, n_rig_targets) float32: rig weights -> frame weights (clipped 0..MAX_GAIN); None: the rig's."""
     source: Path | None
     """The user's file served as is, or None (mien's glTF of the rig is served)."""
     file_to_rig: np.ndarray | None
@@ -83,7 +87,7 @@ def frame_weights(view: HeadView, weights: np.ndarray) -> np.ndarray:
     if view.matrix is None:
         return weights
     out = view.matrix @ weights
-    np.clip(out, 0.0, 1.0, out=out)
+    np.clip(out, 0.0, MAX_GAIN, out=out)
     return out
 
 

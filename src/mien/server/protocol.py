@@ -37,7 +37,8 @@ bytes  type     field
 12-15  uint32   character row
 16-23  float64  time_s (server clock, seconds)
 24-43  5 float32 head yaw, pitch, roll, gaze yaw, pitch (degrees)
-44..   float16  n_weights morph weights 0..1 in the order of the head's glTF ``targetNames``
+44..   float16  n_weights morph weights 0..1 in the order of the head's glTF ``targetNames`` (a user's head file:
+                 up to 2.5 where mien drives a timid shape harder, see mien.heads.amplitude)
 ====== ======== ========================================================================
 """
 
