@@ -26,7 +26,6 @@ pose channels when the file rotates a node, resampled to a uniform frame rate es
 
 from __future__ import annotations
 
-import json
 import struct
 import weakref
 import zlib
@@ -35,9 +34,11 @@ from typing import Any
 import numpy as np
 
 from mien.errors import InvalidValueError
+from mien.exchange.quaternions import matrix_quaternions
 from mien.exchange.timing import uniform_clip
 from mien.facs.catalogue import POSE_CHANNELS
 from mien.facs.clip import Clip
+from mien.fileio.glb import COMPONENT_DTYPES, dequantize, pack_glb, read_accessor, unpack_glb
 from mien.fileio.streams import Source, TargetT, read_bytes, source_name, write_bytes
 from mien.rig.model import Rig
 
@@ -55,13 +56,8 @@ __all__ = [
 SUFFIXES: tuple[str, ...] = (".glb",)
 """File suffixes of this format."""
 
-_GLB_MAGIC = 0x46546C67  # "glTF"
-_JSON_CHUNK = 0x4E4F534A  # "JSON"
-_BIN_CHUNK = 0x004E4942  # "BIN\0"
 _FLOAT, _UINT32, _UINT16, _UINT8 = 5126, 5125, 5123, 5121
 _ARRAY_BUFFER, _ELEMENT_ARRAY_BUFFER = 34962, 34963
-_COMPONENTS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4}
-_DTYPES = {_FLOAT: np.float32, _UINT32: np.uint32, _UINT16: np.uint16, _UINT8: np.uint8, 5122: np.int16, 5120: np.int8}
 
 _HEAD_CACHE: weakref.WeakKeyDictionary[Rig, bytes] = weakref.WeakKeyDictionary()
 
@@ -95,7 +91,7 @@ class _Builder:
     def accessor(
         self, array: np.ndarray, kind: str, component: int = _FLOAT, target: int | None = None, bounds: bool = False
     ) -> int:
-        data = np.ascontiguousarray(array, dtype=_DTYPES[component])
+        data = np.ascontiguousarray(array, dtype=COMPONENT_DTYPES[component])
         accessor: dict[str, Any] = {
             "bufferView": self.view(data.tobytes(), target),
             "componentType": component,
@@ -193,20 +189,6 @@ def _quaternions(poses_deg: np.ndarray) -> np.ndarray:
     from mien.rig.pose import _rotations
 
     return matrix_quaternions(_rotations(poses_deg[:, 0], poses_deg[:, 1], poses_deg[:, 2]))
-
-
-def matrix_quaternions(r: np.ndarray) -> np.ndarray:
-    """(n, 4) float32 unit quaternions (x, y, z, w), glTF's order, of (n, 3, 3) rotation matrices."""
-    w = np.sqrt(np.maximum(0.0, 1.0 + r[:, 0, 0] + r[:, 1, 1] + r[:, 2, 2])) / 2.0
-    x = np.sqrt(np.maximum(0.0, 1.0 + r[:, 0, 0] - r[:, 1, 1] - r[:, 2, 2])) / 2.0
-    y = np.sqrt(np.maximum(0.0, 1.0 - r[:, 0, 0] + r[:, 1, 1] - r[:, 2, 2])) / 2.0
-    z = np.sqrt(np.maximum(0.0, 1.0 - r[:, 0, 0] - r[:, 1, 1] + r[:, 2, 2])) / 2.0
-    x = np.copysign(x, r[:, 2, 1] - r[:, 1, 2])
-    y = np.copysign(y, r[:, 0, 2] - r[:, 2, 0])
-    z = np.copysign(z, r[:, 1, 0] - r[:, 0, 1])
-    q = np.stack([x, y, z, w], axis=1)
-    q /= np.linalg.norm(q, axis=1, keepdims=True)
-    return np.asarray(q, np.float32)
 
 
 def _angles(quaternions: np.ndarray) -> np.ndarray:
@@ -309,23 +291,6 @@ def document_of(
     return gltf, binary
 
 
-def pack_glb(gltf: dict[str, Any], binary: bytes) -> bytes:
-    """GLB bytes of a glTF JSON document and its binary chunk (buffer 0; padded here to 4 bytes)."""
-    binary = binary + b"\0" * ((-len(binary)) % 4)
-    text = json.dumps(gltf, separators=(",", ":")).encode("utf-8")
-    text += b" " * ((-len(text)) % 4)
-    total = 12 + 8 + len(text) + 8 + len(binary)
-    return b"".join(
-        [
-            struct.pack("<III", _GLB_MAGIC, 2, total),
-            struct.pack("<II", len(text), _JSON_CHUNK),
-            text,
-            struct.pack("<II", len(binary), _BIN_CHUNK),
-            binary,
-        ]
-    )
-
-
 def head_glb_bytes(rig: Rig) -> bytes:
     """The head alone as GLB bytes: mesh, appearance and named morph targets, no animation.
 
@@ -372,72 +337,31 @@ def write(clip: Clip, target: TargetT, rig: Rig | None = None) -> TargetT:
 
 def split_glb(data: bytes, name: str) -> tuple[dict[str, Any], bytes]:
     """The JSON document (a dict) and the binary chunk (``b""`` when none) of GLB ``data``; ``name`` names the
-    file in errors (truncated or corrupt data raises :class:`~mien.errors.InvalidValueError`)."""
-    if len(data) < 20:
-        raise InvalidValueError(f"{name} byte 0", f"{len(data)} bytes", "a GLB file (12-byte header and a JSON chunk)")
-    magic, version, total = struct.unpack_from("<III", data, 0)
-    if magic != _GLB_MAGIC or version != 2:
-        raise InvalidValueError(f"{name} header", data[:8], "a glTF 2.0 binary file (magic 'glTF', version 2)")
-    if total > len(data):
-        raise InvalidValueError(f"{name} length", f"{len(data)} of {total} bytes", "a complete file (truncated?)")
-    json_length, kind = struct.unpack_from("<II", data, 12)
-    if kind != _JSON_CHUNK or 20 + json_length > total:
-        raise InvalidValueError(f"{name} byte 12", kind, "a JSON chunk first")
-    try:
-        document = json.loads(data[20 : 20 + json_length].decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise InvalidValueError(f"{name} JSON chunk", str(exc), "valid JSON") from None
-    binary = b""
-    offset = 20 + json_length
-    if offset + 8 <= total:
-        bin_length, kind = struct.unpack_from("<II", data, offset)
-        if kind == _BIN_CHUNK:
-            if offset + 8 + bin_length > total:
-                raise InvalidValueError(f"{name} BIN chunk", bin_length, "a chunk inside the file (truncated?)")
-            binary = data[offset + 8 : offset + 8 + bin_length]
-    return document, binary
+    file in errors (truncated or corrupt data raises :class:`~mien.fileio.glb.GlbError`, an
+    :class:`~mien.errors.InvalidValueError`). The container is :mod:`mien.fileio.glb`'s."""
+    document, binary = unpack_glb(data, name)
+    return document, binary or b""
 
 
 def _read_accessor(document: dict[str, Any], binary: bytes, index: int, name: str) -> np.ndarray:
+    """(count, width) float64 values of accessor ``index`` (buffer 0 only: mien's own files have no other)."""
+    views = document.get("bufferViews") or []
+
+    def view_bytes(view_index: int) -> bytes:
+        view = views[view_index]
+        start = int(view.get("byteOffset", 0))
+        data = binary[start : start + int(view["byteLength"])]
+        if len(data) != int(view["byteLength"]):
+            raise InvalidValueError(f"{name} bufferView {view_index}", "past the end of the buffer", "a complete file")
+        return data
+
     try:
-        accessor = document["accessors"][index]
-        dtype = np.dtype(_DTYPES[accessor["componentType"]])
-        width = _COMPONENTS[accessor["type"]]
-        count = int(accessor["count"])
-
-        def block(view_index: int, offset: int, n: int, item_dtype: np.dtype[Any], items: int) -> np.ndarray:
-            view = document["bufferViews"][view_index]
-            start = int(view.get("byteOffset", 0)) + offset
-            stride = int(view.get("byteStride", 0)) or item_dtype.itemsize * items
-            if start + stride * max(n - 1, 0) + item_dtype.itemsize * items > len(binary):
-                raise InvalidValueError(f"{name} accessor {index}", "past the end of the buffer", "a complete file")
-            rows = np.ndarray((n, items), item_dtype, binary, start, (stride, item_dtype.itemsize))
-            return np.array(rows)
-
-        if "bufferView" in accessor:
-            values = block(accessor["bufferView"], int(accessor.get("byteOffset", 0)), count, dtype, width)
-        else:
-            values = np.zeros((count, width), dtype)
-        sparse = accessor.get("sparse")
-        if sparse:
-            ids = block(
-                sparse["indices"]["bufferView"],
-                int(sparse["indices"].get("byteOffset", 0)),
-                int(sparse["count"]),
-                np.dtype(_DTYPES[sparse["indices"]["componentType"]]),
-                1,
-            )[:, 0]
-            values[ids.astype(np.int64)] = block(
-                sparse["values"]["bufferView"], int(sparse["values"].get("byteOffset", 0)), len(ids), dtype, width
-            )
+        values = read_accessor(document, index, view_bytes, name)
+        return dequantize(values, document["accessors"][index]).astype(np.float64)
     except (KeyError, IndexError, TypeError, ValueError) as exc:
         if isinstance(exc, InvalidValueError):
             raise
         raise InvalidValueError(f"{name} accessor {index}", repr(exc), "a valid glTF accessor") from None
-    result = values.astype(np.float64)
-    if accessor.get("normalized") and dtype.kind in "iu":
-        result /= float(2 ** (8 * dtype.itemsize - (1 if dtype.kind == "i" else 0)) - 1)
-    return result
 
 
 def read(source: Source) -> Clip:

@@ -24,7 +24,6 @@ placed by its landmarks alone (no eyes it could name) keeps the file's axes, whi
 from __future__ import annotations
 
 import base64
-import json
 import math
 import re
 import warnings
@@ -35,9 +34,10 @@ import numpy as np
 
 from mien.errors import InvalidValueError
 from mien.exchange.file_shapes import rig_shape_weights
-from mien.exchange.glb import matrix_quaternions, pack_glb, split_glb
+from mien.exchange.quaternions import matrix_quaternions
 from mien.facs.catalogue import POSE_CHANNELS
 from mien.facs.clip import Clip
+from mien.fileio.glb import MAGIC, pack_glb, parse_json, unpack_glb
 from mien.fileio.streams import TargetT, write_bytes
 from mien.rig.model import Rig
 
@@ -143,15 +143,9 @@ def _standalone(source: Path) -> tuple[dict[str, Any], bytearray]:
     if not source.is_file():
         raise InvalidValueError("head file", str(source), "the character file the head was read from (moved?)")
     data = source.read_bytes()
-    if data[:4] == b"glTF":
-        document, chunk = split_glb(data, str(source))
-        is_glb = True
-    else:
-        try:
-            document = json.loads(data.decode("utf-8"))
-        except (UnicodeDecodeError, ValueError) as exc:
-            raise InvalidValueError(str(source), f"JSON that does not parse ({exc})", "a glTF 2.0 file") from None
-        chunk, is_glb = b"", False
+    is_glb = data[:4] == MAGIC
+    document, found = unpack_glb(data, str(source)) if is_glb else (parse_json(data, str(source)), None)
+    chunk = found or b""
     blob = bytearray()
     buffers = document.get("buffers") or []
     new_buffers: list[dict[str, Any]] = [{}]
