@@ -40,6 +40,7 @@ from mien.errors import InvalidValueError
 __all__ = [
     "COMPONENT_DTYPES",
     "TYPE_WIDTHS",
+    "BytesLike",
     "GlbError",
     "dequantize",
     "pack_glb",
@@ -68,6 +69,8 @@ COMPONENT_DTYPES: dict[int, type[np.generic]] = {
 """glTF ``componentType`` -> NumPy scalar type."""
 TYPE_WIDTHS: dict[str, int] = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
 """glTF accessor ``type`` -> components per element."""
+BytesLike = bytes | bytearray | memoryview
+"""What a buffer view's data may be: a zero-copy slice of a file's buffer is a memoryview."""
 _NORMALIZE: dict[int, float] = {5120: 127.0, 5121: 255.0, 5122: 32767.0, 5123: 65535.0}
 
 
@@ -161,7 +164,7 @@ def parse_json(text: bytes, name: str) -> dict[str, Any]:
 # Accessors
 
 
-def _rows(data: bytes, offset: int, stride: int, dtype: np.dtype[Any], width: int, count: int) -> np.ndarray | None:
+def _rows(data: BytesLike, offset: int, stride: int, dtype: np.dtype[Any], width: int, count: int) -> np.ndarray | None:
     """(count, width) copy of strided elements of ``data``, or None when they run past its end."""
     item = dtype.itemsize * width
     stride = stride or item
@@ -177,7 +180,7 @@ def _rows(data: bytes, offset: int, stride: int, dtype: np.dtype[Any], width: in
 
 
 def read_accessor(
-    document: Mapping[str, Any], index: int, view_bytes: Callable[[int], bytes], name: str,
+    document: Mapping[str, Any], index: int, view_bytes: Callable[[int], BytesLike], name: str,
     stride_of: Callable[[int], int] | None = None,
 ) -> np.ndarray:  # fmt: skip
     """(count, width) array of accessor ``index`` in its stored type (integers stay integers), sparse applied.

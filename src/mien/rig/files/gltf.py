@@ -132,7 +132,7 @@ class _Reader:
     def __init__(self, gltf: Any, path: Path, blob: bytes | None) -> None:
         self.gltf, self.path, self.blob = gltf, path, blob
         self._buffers: dict[int, bytes] = {}
-        self._views: dict[int, bytes] = {}
+        self._views: dict[int, memoryview] = {}  # zero-copy slices of the buffers, or decoded data
 
     def fail(self, problem: str) -> HeadFileError:
         return HeadFileError(self.path, problem)
@@ -164,7 +164,7 @@ class _Reader:
         self._buffers[index] = data
         return data
 
-    def view(self, index: int) -> bytes:
+    def view(self, index: int) -> memoryview:
         if index in self._views:
             return self._views[index]
         try:
@@ -176,7 +176,7 @@ class _Reader:
             meshopt = require("meshopt", "heads")
             source = self.buffer(int(meshopt_ext["buffer"]))
             start = int(meshopt_ext.get("byteOffset", 0))
-            packed = source[start : start + int(meshopt_ext["byteLength"])]
+            packed = memoryview(source)[start : start + int(meshopt_ext["byteLength"])]
             count, stride = int(meshopt_ext["count"]), int(meshopt_ext["byteStride"])
             try:
                 decoded = meshopt.decode_gltf_buffer(
@@ -184,11 +184,11 @@ class _Reader:
                 )
             except Exception as exc:  # the decoder's own errors: corrupt or truncated stream
                 raise self.fail(f"bufferView {index}: EXT_meshopt_compression data does not decode ({exc})") from None
-            data = np.ascontiguousarray(decoded).tobytes()
+            data = np.ascontiguousarray(decoded).data.cast("B")
         else:
             source = self.buffer(int(view.buffer))
             start = int(view.byteOffset or 0)
-            data = source[start : start + int(view.byteLength)]
+            data = memoryview(source)[start : start + int(view.byteLength)]
             if len(data) != int(view.byteLength):
                 raise self.fail(f"bufferView {index} runs past the end of buffer {view.buffer} (truncated file?)")
         self._views[index] = data
@@ -298,7 +298,7 @@ def _scene_nodes(gltf: Any) -> list[int]:
 def _draco(reader: _Reader, primitive: Any, ext: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     dracopy = require("DracoPy", "heads")
     try:
-        mesh = dracopy.decode(reader.view(int(ext["bufferView"])))
+        mesh = dracopy.decode(bytes(reader.view(int(ext["bufferView"]))))
     except Exception as exc:  # DracoPy raises its own failure types
         raise reader.fail(f"KHR_draco_mesh_compression data does not decode ({exc})") from None
     attributes = ext.get("attributes", {})
@@ -378,14 +378,27 @@ def _primitive(
             raise reader.fail(f"mesh {mesh_name!r}: JOINTS/WEIGHTS do not match its skin")
         total = weights.sum(axis=1, keepdims=True)
         weights = np.divide(weights, total, out=np.zeros_like(weights), where=total > 0)
-        blend = np.einsum("nk,nkij->nij", weights, skin_matrices[joints])  # (n, 4, 4) per-vertex matrix
-        pos64 = np.einsum("nij,nj->ni", blend[:, :3, :3], pos64) + blend[:, :3, 3]
-        for name in targets:
-            targets[name] = np.einsum("nij,nj->ni", blend[:, :3, :3], targets[name].astype(np.float64)).astype(
-                np.float32
-            )
+        # Per-vertex blended matrix, its top 3x4 rows only: (n, 3, 4), a sum over the few influences per vertex.
+        top = skin_matrices[:, :3, :]
+        blend = np.zeros((n, 3, 4))
+        for k in range(joints.shape[1]):
+            blend += weights[:, k, None, None] * top[joints[:, k]]
+        columns = [np.ascontiguousarray(blend[:, :, j]) for j in range(4)]  # (n, 3) each: x, y, z columns, shift
+        pos64 = pos64[:, 0:1] * columns[0] + pos64[:, 1:2] * columns[1] + pos64[:, 2:3] * columns[2] + columns[3]
+        for name, delta in targets.items():  # only the rows a target moves (most are zero): R @ 0 = 0
+            moved = delta.reshape(-1) != 0
+            rows = np.flatnonzero(moved[0::3] | moved[1::3] | moved[2::3])
+            d = delta[rows].astype(np.float64)
+            turned = np.zeros_like(delta)
+            turned[rows] = d[:, 0:1] * columns[0][rows] + d[:, 1:2] * columns[1][rows] + d[:, 2:3] * columns[2][rows]
+            targets[name] = turned
+        # Weight of each joint on each vertex: one bincount over (vertex, joint) pairs.
+        n_joints = len(skin_matrices)
+        pairs = np.bincount(
+            (np.arange(n)[:, None] * n_joints + joints).reshape(-1), weights.reshape(-1), minlength=n * n_joints
+        ).reshape(n, n_joints)
         for joint in np.unique(joints[weights > 0]):
-            joint_weights[joints_of_skin[int(joint)]] = (weights * (joints == joint)).sum(axis=1).astype(np.float32)
+            joint_weights[joints_of_skin[int(joint)]] = pairs[:, joint].astype(np.float32)
     elif place is not None:
         pos64 = pos64 @ place[:3, :3].T + place[:3, 3]
         for name in targets:
@@ -407,7 +420,7 @@ def _images(reader: _Reader) -> dict[int, tuple[bytes, str]]:
     for i, image in enumerate(reader.gltf.images or []):
         try:
             if image.bufferView is not None:
-                out[i] = (reader.view(image.bufferView), image.mimeType or "")
+                out[i] = (bytes(reader.view(image.bufferView)), image.mimeType or "")
             elif image.uri and image.uri.startswith("data:"):
                 head, _, payload = image.uri.partition(",")
                 out[i] = (base64.b64decode(payload), head[5:].split(";")[0])
