@@ -173,8 +173,11 @@ _NUMBERS = (
 _WALK_STREAMS = np.arange(2 * len(_WALKS), dtype=np.uint64)  # walk i: stream 2i (move?), 2i + 1 (direction)
 _WALK_PARAMS = tuple((i, w.a, w.b, w.step, w.move_probability) for i, w in enumerate(_WALKS))
 _DRAW_BLOCK = 16
-"""Walk ticks (or blink intervals, or fixations) a batch of one row draws at a time: one numpy call costs
-about the same for 1 or 16 draws, and a block of 16 is a small step-time spike every 16 ticks."""
+"""Walk ticks a batch of one row draws at a time: one numpy call costs about the same for 1 or 16 draws, and
+a block of 16 is a small step-time spike (about 40 us) every 16 ticks."""
+_EVENT_BLOCK = 128
+"""Blink intervals or fixations a batch of one row draws at a time: a refill costs about 150-250 us, so it
+comes once every 128 blinks (minutes apart), well under one step in a thousand (bench/character_step.py)."""
 _AU12L, _AU15L, _AU5L, _AU43L, _AU45L = (pair.start for pair in (_AU12, _AU15, _AU5, _AU43, _AU45))
 IDLE_COLUMNS = np.r_[_AU5, _AU12, _AU15, _AU43, _AU45, _YAW, _ROLL, _GAZE_YAW]
 """(13,) face-frame columns idle motion writes (AU5, AU12, AU15, AU43, AU45 left and right, head yaw and roll,
@@ -579,16 +582,16 @@ class IdleBatch:
         return m
 
     def _drawn_one(self, block: _Block, k: int) -> Any:
-        """Draw ``k`` of a one-row block (blink intervals or fixations), drawing :data:`_DRAW_BLOCK` more when due."""
+        """Draw ``k`` of a one-row block (blink intervals or fixations), drawing :data:`_EVENT_BLOCK` more when due."""
         if not block.first <= k < block.first + len(block.values):
-            seed = np.full(_DRAW_BLOCK, self.seeds[0])
-            ks = np.arange(k, k + _DRAW_BLOCK, dtype=np.uint64)
-            num = {name: np.full(_DRAW_BLOCK, values[0]) for name, values in self._num.items()}
+            seed = np.full(_EVENT_BLOCK, self.seeds[0])
+            ks = np.arange(k, k + _EVENT_BLOCK, dtype=np.uint64)
+            num = {name: np.full(_EVENT_BLOCK, values[0]) for name, values in self._num.items()}
             if block is self._blink_block:
                 intervals = _blink_interval(num["blink_mean_s"], num["blink_sd_s"], num["blink_duration_s"], seed, ks)
                 block.values = intervals.tolist()
             else:
-                low, high = np.full(_DRAW_BLOCK, self._hold_low[0]), np.full(_DRAW_BLOCK, self._hold_high[0])
+                low, high = np.full(_EVENT_BLOCK, self._hold_low[0]), np.full(_EVENT_BLOCK, self._hold_high[0])
                 hold, yaw = _fixation(low, high, num["gaze_yaw_deg"], seed, ks)
                 block.values = list(zip(hold.tolist(), yaw.tolist(), strict=True))
             block.first = k
