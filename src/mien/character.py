@@ -553,9 +553,7 @@ class Character:
 
     # ------------------------------------------------------------------ commands (see CharacterBatch)
 
-    def set_aus(
-        self, intensities: Mapping[str, float], *, speed: float | None = None, replace: bool = False
-    ) -> None:
+    def set_aus(self, intensities: Mapping[str, float], *, speed: float | None = None, replace: bool = False) -> None:
         """Hold several AUs; ``speed`` is OpenFACS's per-tick Speed; ``replace`` zeroes the AUs not named."""
         self.batch.set_aus(0, intensities, speed=speed, replace=replace)
 

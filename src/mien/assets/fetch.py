@@ -75,7 +75,6 @@ def _download(url: str, target: Path, show_progress: bool, timeout_s: float, lab
     import urllib.error
     import urllib.request
 
-
     if not re.match(r"(?i)^(https?|file)://", url):
         raise InvalidValueError("url", url, "an http://, https:// or file:// URL")
     request = urllib.request.Request(url, headers={"User-Agent": "mien-assets-fetch"})

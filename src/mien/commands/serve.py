@@ -60,6 +60,7 @@ def run(args: argparse.Namespace) -> int:
     require("mien.server.app", "serve")  # a missing fastapi/uvicorn names mien[serve]
     from mien.server.app import LiveServer, ServeConfig, is_loopback
     from mien.server.registry import CharacterSpec
+
     ids = args.character or ["default"]
     specs = tuple(
         CharacterSpec(character_id, head=args.head, identity=args.identity, seed=args.seed + i, idle=not args.no_idle)

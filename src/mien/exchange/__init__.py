@@ -29,6 +29,7 @@ from types import ModuleType
 from typing import Any
 
 from mien.errors import InvalidValueError, UnknownNameError
+from mien.fileio.streams import read_bytes, source_name
 
 __all__ = [
     "FORMATS",
@@ -146,8 +147,6 @@ def reader_for(path: str | os.PathLike[str], format: str | None = None) -> Calla
 def _sniffing_reader(suffix: str) -> Callable[..., Any]:
     def read(source: Any) -> Any:
         import io
-
-        from mien.fileio.streams import read_bytes, source_name
 
         if isinstance(source, (str, os.PathLike)):
             return reader_for(source)(source)

@@ -33,11 +33,14 @@ import numpy as np
 
 from mien.errors import InvalidValueError
 from mien.exchange.csv_table import check_increasing, columns_from_text
+from mien.exchange.file_shapes import file_shape_names, shape_weights, source_rows
 from mien.exchange.timing import uniform_clip
 from mien.facs.arkit import ARKIT_NAMES
 from mien.facs.catalogue import POSE_CHANNELS
 from mien.facs.clip import Clip
 from mien.fileio.streams import Source, TargetT, read_text, refuse_rig, source_name, write_text
+from mien.rig.builtin_head import builtin_head
+from mien.rig.face_weights import clip_to_rig, is_weight_clip
 from mien.rig.model import Rig
 
 __all__ = ["COLUMNS", "ROTATION_COLUMNS", "SUFFIXES", "format_timecode", "parse_timecode", "read", "sniff", "write"]
@@ -182,14 +185,11 @@ def write(clip: Clip, target: TargetT, rig: object = None, names: str = "arkit")
     :mod:`mien.exchange.file_shapes` gives (a tool that maps those names, such as a game engine's pose asset,
     then plays the clip on that character). Such a file is for that character; this reader reads ARKit columns.
     """
-    from mien.rig.face_weights import clip_to_rig, is_weight_clip
 
     if names not in ("arkit", "file"):
         raise InvalidValueError("names", names, "arkit (Live Link Face's columns) or file (the head file's shapes)")
     columns: tuple[str, ...] = COLUMNS[:52]
     if names == "file":
-        from mien.exchange.file_shapes import file_shape_names, shape_weights, source_rows
-
         if not isinstance(rig, Rig):
             raise InvalidValueError("names", names, "a head read from a character file to take the names from")
         rows = source_rows(rig)
@@ -211,7 +211,6 @@ def write(clip: Clip, target: TargetT, rig: object = None, names: str = "arkit")
                 weights[:, ARKIT_NAMES.index(channel)] = clip.values[:, j]
     else:
         refuse_rig(rig, "Live Link Face .csv")
-        from mien.rig.builtin_head import builtin_head
 
         all_weights, poses = clip_to_rig(clip, builtin_head())
         weights = np.asarray(all_weights[:, :52], np.float64)

@@ -34,13 +34,21 @@ from typing import Any
 import numpy as np
 
 from mien.errors import InvalidValueError
+from mien.exchange.glb_user import carries_file
+from mien.exchange.glb_user import write as write_user_file
 from mien.exchange.quaternions import matrix_quaternions
 from mien.exchange.timing import uniform_clip
 from mien.facs.catalogue import POSE_CHANNELS
 from mien.facs.clip import Clip
 from mien.fileio.glb import COMPONENT_DTYPES, dequantize, pack_glb, read_accessor, unpack_glb
 from mien.fileio.streams import Source, TargetT, read_bytes, source_name, write_bytes
+from mien.render.appearance import SKIN_ALBEDO, rig_vertex_colors, visible_faces
+from mien.render.face_paint import face_paint
+from mien.render.offscreen import vertex_normals
+from mien.rig.face_weights import clip_to_rig
+from mien.rig.heads import open_head
 from mien.rig.model import Rig
+from mien.rig.pose import _rotations
 
 __all__ = [
     "SUFFIXES",
@@ -159,8 +167,6 @@ def _srgb(linear: np.ndarray) -> np.ndarray:
 
 def _appearance(rig: Rig) -> tuple[np.ndarray, np.ndarray | None, bytes | None]:
     """(colours (n, 3) linear, texcoords (n, 2) or None, PNG of the paint as a colour multiplier or None)."""
-    from mien.render.appearance import SKIN_ALBEDO, rig_vertex_colors
-    from mien.render.face_paint import face_paint
 
     colors = rig_vertex_colors(rig).copy()
     paint = face_paint(rig)
@@ -186,7 +192,6 @@ def _appearance(rig: Rig) -> tuple[np.ndarray, np.ndarray | None, bytes | None]:
 
 def _quaternions(poses_deg: np.ndarray) -> np.ndarray:
     """(n, 4) float32 unit quaternions (x, y, z, w) of the head rotations of (n, 5) pose degrees."""
-    from mien.rig.pose import _rotations
 
     return matrix_quaternions(_rotations(poses_deg[:, 0], poses_deg[:, 1], poses_deg[:, 2]))
 
@@ -216,8 +221,6 @@ def document_of(
 ) -> tuple[dict[str, Any], bytes]:
     """The glTF JSON (a dict) and binary chunk of ``rig`` animated by (n, n_targets) ``weights`` and (n, 5)
     ``poses`` at ``fps`` (both None: the still head). Node 0 is ``head``, node 1 ``face`` (the mesh)."""
-    from mien.render.appearance import visible_faces
-    from mien.render.offscreen import vertex_normals
 
     built = _Builder()
     faces = visible_faces(rig)
@@ -312,19 +315,13 @@ def write(clip: Clip, target: TargetT, rig: Rig | None = None) -> TargetT:
     ``clip``: face channels (AU intensities, pose degrees) or the rig's target names (weights 0..1) plus
     optional pose channels (see :func:`mien.rig.face_weights.clip_to_rig`). Returns ``target``.
     """
-    from mien.rig.face_weights import clip_to_rig
 
     if rig is None:
-        from mien.rig.heads import open_head
-
         rig = open_head()
     if clip.n_frames == 0:
         raise InvalidValueError("clip", "0 frames", "a clip with at least one frame to animate")
-    from mien.exchange.glb_user import carries_file
 
     if carries_file(rig):  # a head read from the user's glTF file: that file, animated
-        from mien.exchange.glb_user import write as write_user_file
-
         return write_user_file(clip, target, rig)
     weights, poses = clip_to_rig(clip, rig)
     write_bytes(_document(rig, weights, poses, clip.fps), target)

@@ -39,7 +39,9 @@ from mien.facs.catalogue import POSE_CHANNELS
 from mien.facs.clip import Clip
 from mien.fileio.glb import MAGIC, pack_glb, parse_json, unpack_glb
 from mien.fileio.streams import TargetT, write_bytes
+from mien.rig.face_weights import clip_to_rig
 from mien.rig.model import Rig
+from mien.rig.pose import _rotations
 
 __all__ = ["ANIMATION_NAME", "FILE_FORMATS", "carries_file", "user_file_bytes", "write"]
 
@@ -72,7 +74,6 @@ def write(clip: Clip, target: TargetT, rig: Rig) -> TargetT:
 
 def user_file_bytes(clip: Clip, rig: Rig) -> bytes:
     """GLB bytes of the file ``rig`` was read from with ``clip`` as an animation (see :func:`write`)."""
-    from mien.rig.face_weights import clip_to_rig
 
     if not carries_file(rig):
         raise InvalidValueError("head", rig.name, "a head read from a .glb, .gltf or .vrm file")
@@ -109,7 +110,6 @@ def user_file_bytes(clip: Clip, rig: Rig) -> bytes:
     head_node, eye_nodes = _pose_nodes(document)
     has_head = any(c in clip.channels for c in POSE_CHANNELS[:3])
     has_gaze = any(c in clip.channels for c in POSE_CHANNELS[3:])
-    from mien.rig.pose import _rotations
 
     if has_head:
         if head_node is None:

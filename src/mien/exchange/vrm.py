@@ -32,9 +32,19 @@ import numpy as np
 
 from mien.errors import InvalidValueError
 from mien.exchange.glb import document_of, pack_glb
+from mien.exchange.glb import read as read_glb
+from mien.exchange.glb_user import carries_file
+from mien.exchange.glb_user import write as write_user_file
+from mien.facs.arkit import ARKIT_NAMES
 from mien.facs.clip import Clip
+from mien.facs.prototypes import prototype_vector
 from mien.fileio.streams import Source, TargetT, write_bytes
+from mien.fileio.tables import read_table
+from mien.rig.animate import face_to_rig
+from mien.rig.face_weights import clip_to_rig
+from mien.rig.heads import open_head
 from mien.rig.model import Rig
+from mien.version import __version__
 
 __all__ = [
     "EXPRESSION_PRESETS",
@@ -100,7 +110,6 @@ BIND_THRESHOLD = 0.01
 
 @cache
 def _expression_rows() -> tuple[tuple[str, str, float, tuple[tuple[str, float], ...]], ...]:
-    from mien.fileio.tables import read_table
 
     rows = []
     for row in read_table(*_TABLE):
@@ -118,8 +127,6 @@ EXPRESSION_PRESETS: tuple[str, ...] = tuple(row[0] for row in _expression_rows()
 
 def expression_weights(rig: Rig) -> dict[str, np.ndarray]:
     """Preset -> (n_targets,) float32 weights 0..1 of ``rig``'s targets that make it (``data/vrm_expressions.csv``)."""
-    from mien.facs.prototypes import prototype_vector
-    from mien.rig.animate import face_to_rig
 
     out = {}
     for name, emotion, intensity, pairs in _expression_rows():
@@ -148,8 +155,6 @@ def vrm_document(
     rig: Rig, weights: np.ndarray | None, poses: np.ndarray | None, fps: float, meta: Mapping[str, Any] | None = None
 ) -> tuple[dict[str, Any], bytes]:
     """The VRM 1.0 glTF JSON and binary chunk of ``rig`` (animated by ``weights`` / ``poses`` when given)."""
-    from mien.facs.arkit import ARKIT_NAMES
-    from mien.version import __version__
 
     gltf, binary = document_of(rig, weights, poses, fps)
     nodes = gltf["nodes"]  # 0: head (at the neck pivot, a root), 1: face (the mesh)
@@ -201,20 +206,14 @@ def write(clip: Clip, target: TargetT, rig: Rig | None = None, meta: Mapping[str
     """Write ``rig`` (default: :func:`mien.rig.heads.open_head`) with its VRM 1.0 expressions and ``clip`` as an
     animation to ``target`` (see the module doc); ``meta`` overrides ``VRMC_vrm.meta`` fields. Returns ``target``.
     """
-    from mien.exchange.glb_user import carries_file
-    from mien.rig.face_weights import clip_to_rig
 
     if rig is None:
-        from mien.rig.heads import open_head
-
         rig = open_head()
     if clip.n_frames == 0:
         raise InvalidValueError("clip", "0 frames", "a clip with at least one frame to animate")
     if carries_file(rig):
         fmt = getattr(rig, "info").format  # noqa: B009 (carries_file checked it)
         if fmt == "vrm1":
-            from mien.exchange.glb_user import write as write_user_file
-
             return write_user_file(clip, target, rig)
         warnings.warn(
             f"head {rig.name!r} comes from a {'VRM 0.x' if fmt == 'vrm0' else 'glTF'} file: the VRM 1.0 file is "
@@ -232,6 +231,5 @@ def read(source: Source) -> Clip:
     The avatar itself (meshes, expressions) is read as a head: ``--head avatar.vrm``
     (:func:`mien.heads.load_head`).
     """
-    from mien.exchange.glb import read as read_glb
 
     return read_glb(source)

@@ -417,9 +417,7 @@ class FacsEngine:
         """Hold ``au`` at ``intensity`` (see :meth:`FacsBatch.set`)."""
         self.batch.set(0, au, intensity, tau_s=tau_s)
 
-    def set_many(
-        self, intensities: Mapping[str, float], *, speed: float | None = None, replace: bool = False
-    ) -> None:
+    def set_many(self, intensities: Mapping[str, float], *, speed: float | None = None, replace: bool = False) -> None:
         """Hold several AUs at once (see :meth:`FacsBatch.set_many`)."""
         self.batch.set_many(0, intensities, speed=speed, replace=replace)
 

@@ -491,7 +491,6 @@ class IdleBatch:
             frames[:, _YAW] += amp["wobble_yaw"] * np.sin(angle + self._phase[:, 0])
             frames[:, _ROLL] += amp["wobble_roll"] * np.sin(angle / 1.37 + self._phase[:, 1])
 
-
     def apply_row(self, t_s: float, values: list[float], mouth_scale: float = 1.0) -> None:
         """:meth:`apply` for a batch of one row, into its (62,) face frame as a list of floats, in place.
 
@@ -611,6 +610,7 @@ class IdleBatch:
         if state is not None:
             self._tick[0], self._m[0] = state
             self._walk_one_state = None
+
 
 class Idle:
     """Idle behaviour of one character: an :class:`IdleBatch` of one row (one implementation of both)."""

@@ -201,7 +201,6 @@ class _VideoOutcome:
 def _process_video(job: _VideoJob) -> _VideoOutcome:
     """Track one video and compute controller curves per take (runs in a worker; never raises)."""
     try:
-
         track = track_video(job.video, job.model, show_progress=False)
         clips = controllers_from_track(track, eps=job.eps)
         if not clips:
@@ -369,7 +368,6 @@ def learn_library(
         raise InvalidValueError("labels", str(labels), _nothing_usable(skipped))
     model_path = str(Path(model).resolve()) if model is not None else None
     if model_path is None:
-
         model_path = str(require_asset("face_landmarker"))
     output = Path(output)
     work = work_folder(output)

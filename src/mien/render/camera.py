@@ -210,8 +210,7 @@ class View:
 
 
 VIEWS: dict[str, View] = {
-    view.name: view
-    for view in (View(angle, distance) for angle in VIEW_ANGLES_DEG for distance in VIEW_DISTANCES_M)
+    view.name: view for view in (View(angle, distance) for angle in VIEW_ANGLES_DEG for distance in VIEW_DISTANCES_M)
 }
 """View name -> :class:`View`: ``frontal-1m``, ``frontal-3m``, ``oblique-1m``, ``oblique-3m``, ``lateral-1m``,
 ``lateral-3m``, all at the study's field of view."""

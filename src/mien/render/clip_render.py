@@ -29,8 +29,15 @@ from mien.rig.deform import Deformer
 from mien.rig.model import Rig
 from mien.rig.pose import apply_pose
 
-__all__ = ["POSE_COLUMNS", "FrameRenderer", "RigTexturedRenderer", "iter_frames", "make_renderer", "render_clip",
-           "render_still"]
+__all__ = [
+    "POSE_COLUMNS",
+    "FrameRenderer",
+    "RigTexturedRenderer",
+    "iter_frames",
+    "make_renderer",
+    "render_clip",
+    "render_still",
+]
 
 POSE_COLUMNS = ("head_yaw_deg", "head_pitch_deg", "head_roll_deg", "gaze_yaw_deg", "gaze_pitch_deg")
 """Columns of a ``poses`` array, degrees (signs as in the face frame: yaw > 0 to the character's left)."""

@@ -370,7 +370,6 @@ def load_ict_facekit(
     arrays: dict[str, np.ndarray] | None = None
     cache_file = ict_cache_file(folder) if cache else None
     if cache_file is not None and cache_file.is_file():
-
         try:
             arrays = load_container(cache_file, _CACHE_FORMAT, _CACHE_FORMAT_VERSION).arrays
         except InvalidValueError:
@@ -378,6 +377,5 @@ def load_ict_facekit(
     if arrays is None:
         arrays = _parse(model)
         if cache_file is not None:
-
             save_container(cache_file, _CACHE_FORMAT, _CACHE_FORMAT_VERSION, {"model": str(model)}, arrays, False)
     return _build(arrays, coeffs, "ict-facekit")

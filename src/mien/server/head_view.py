@@ -33,6 +33,8 @@ from urllib.parse import unquote
 import numpy as np
 
 from mien.heads.amplitude import MAX_GAIN
+from mien.rig.files.gltf import read_gltf
+from mien.rig.files.head import _vrm_expressions
 from mien.rig.model import Rig
 
 __all__ = ["HeadView", "frame_weights", "head_view", "referenced_files"]
@@ -105,7 +107,6 @@ def head_view(rig: Rig) -> HeadView:
         note = (f"{source.name}: shown as mien's glTF of the rig: the file has no shapes for {len(lacking)} "
                 f"of its targets ({', '.join(lacking[:3])}...)")  # fmt: skip
         return HeadView(names, None, None, None, note=note)
-    from mien.rig.files.gltf import read_gltf
 
     scene = read_gltf(source)
     expansions = _vrm_binds(scene.gltf) if info.format in ("vrm0", "vrm1") else {}
@@ -140,7 +141,6 @@ def _weight_matrix(
 def _vrm_binds(gltf: Any) -> dict[str, list[tuple[str, float]]]:
     """VRM expression name -> [(morph-target name, weight 0..1)], the names three.js gives them (the mesh's
     ``extras.targetNames``, else the index)."""
-    from mien.rig.files.head import _vrm_expressions  # the one reader of VRM expressions
 
     _, expressions = _vrm_expressions(gltf, [])
     out: dict[str, list[tuple[str, float]]] = {}

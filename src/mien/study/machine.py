@@ -76,7 +76,6 @@ class MachineJudgement:
         """
         import pandas as pd
 
-
         rows = []
         for expression in dict.fromkeys(s.stimulus.expression for s in self.result.scores):
             scores = self.result.subset(expression=expression)
@@ -197,7 +196,6 @@ def judge_stimuli(
     manifest = load_manifest(folder, verify=True)
     own = detector is None
     if detector is None:
-
         require_asset("face_landmarker", landmarker)
         require_asset("emotion_model", emotion_model)
         detector = FaceDetector(landmarker, emotion_model)

@@ -268,7 +268,6 @@ def _provenance(analysis: StudyAnalysis, machine: MachineJudgement | str | None)
         "date": time.strftime("%Y-%m-%d %H:%M:%S %Z"),
     }
     if machine is not None and not isinstance(machine, str):
-
         info["detector"] = machine.result.detector
         info["models"] = {
             name: {"path": path, "sha256": file_sha256(path) if path and Path(path).is_file() else ""}

@@ -82,7 +82,6 @@ def create_app(design: "Design", manifest: dict[str, Any], stimuli_folder: str |
     from fastapi.staticfiles import StaticFiles
     from pydantic import BaseModel, Field
 
-
     folder = Path(stimuli_folder).resolve()
     entries = {entry["id"]: entry for entry in manifest["stimuli"]}
     files = {entry["file"] for entry in manifest["stimuli"]}

@@ -491,7 +491,6 @@ class Store:
         nullable Int64. Rows sorted by study, participant, position and on-screen question order."""
         import pandas as pd
 
-
         sa = self._sa
         answers, stimuli, participants = self.tables["answers"], self.tables["stimuli"], self.tables["participants"]
         query = (

@@ -168,7 +168,6 @@ class Track:
         ``.json`` (NaN as null); returns the path."""
         out = Path(path)
         if out.suffix == ".npz":
-
             save_container(out, TRACK_FORMAT, TRACK_FORMAT_VERSION, self.meta(), self.arrays())
         elif out.suffix == ".json":
             data: dict[str, Any] = self.meta()
@@ -193,7 +192,6 @@ def load_track(path: str | os.PathLike[str]) -> Track:
     file = Path(path)
     try:
         if file.suffix == ".npz":
-
             box = load_container(file, TRACK_FORMAT, TRACK_FORMAT_VERSION)
             meta, arrays = box.meta, box.arrays
         elif file.suffix == ".json":

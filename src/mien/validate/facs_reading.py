@@ -74,6 +74,7 @@ def facs_reading(detected: np.ndarray, neutral: np.ndarray, aus: Sequence[int]) 
 
 def with_facs_readings(scores: Sequence[StimulusScore], aus: Sequence[int]) -> tuple[StimulusScore, ...]:
     """``scores`` with :attr:`StimulusScore.facs_top` set against each setup's neutral (zeros where none)."""
+
     def vector(score: StimulusScore) -> np.ndarray:
         seen = merged_aus(score.aus, score.landmark_aus)
         return np.array([seen.get(f"AU{code}", 0.0) for code in aus])

@@ -107,7 +107,6 @@ def _fmt(value: float) -> str:
     return "-" if math.isnan(float(value)) else f"{float(value):.2f}"
 
 
-
 def plot_confusion(result: RecognitionResult, path: str | os.PathLike[str]) -> Path:
     """Heatmap of expression (rows) x top label (columns), each row as shares of its renders."""
     plt = pyplot()

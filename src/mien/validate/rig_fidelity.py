@@ -102,6 +102,7 @@ PRIMARY_SHARE = 0.5
 """A target is one of an AU's primary blendshapes when its mapping weight is at least this share of the AU's
 largest weight."""
 
+
 def fidelity_stats(
     intensities: Sequence[float],
     neutral: np.ndarray,

@@ -20,6 +20,15 @@ import logging
 from dataclasses import fields
 from typing import Any
 
+from mien.affect.emotions import BLENDS, EMOTIONS, MAX_INTENSITY
+from mien.affect.pad import PAD_FACTORS
+from mien.exchange import readable_suffixes
+from mien.facs.catalogue import ACTION_UNITS
+from mien.facs.idle import IdleSettings
+from mien.laughter.taxonomy import TAXONOMY
+from mien.render.camera import VIEWS
+from mien.rig.heads import HEADS
+
 __all__ = ["EMOTION_INTENSITY_MAX", "IDLE_TOGGLES", "INTENSITY_LETTERS", "viewer_controls"]
 
 log = logging.getLogger(__name__)
@@ -39,7 +48,6 @@ IDLE_TOGGLES: dict[str, tuple[str, ...]] = {
 
 
 def _aus() -> list[dict[str, Any]]:
-    from mien.facs.catalogue import ACTION_UNITS
 
     return [
         {
@@ -55,7 +63,6 @@ def _aus() -> list[dict[str, Any]]:
 
 
 def _laughter() -> list[dict[str, Any]]:
-    from mien.laughter.taxonomy import TAXONOMY
 
     return [
         {"type": r.type, "label": r.label, "family": r.family, "duration_s": r.duration_s, "notes": r.notes}
@@ -64,7 +71,6 @@ def _laughter() -> list[dict[str, Any]]:
 
 
 def _cameras() -> list[dict[str, Any]]:
-    from mien.render.camera import VIEWS
 
     out = []
     study_views = sorted((v for v in VIEWS.values() if v.in_study), key=lambda v: (v.distance_m, v.yaw_deg))
@@ -83,7 +89,6 @@ def _cameras() -> list[dict[str, Any]]:
 
 
 def _idle() -> list[dict[str, Any]]:
-    from mien.facs.idle import IdleSettings
 
     flags = {f.name for f in fields(IdleSettings) if f.type in (bool, "bool")}
     missing = sorted({flag for group in IDLE_TOGGLES.values() for flag in group} - flags)
@@ -94,8 +99,6 @@ def _idle() -> list[dict[str, Any]]:
 
 def _clip_suffixes() -> list[str]:
     try:
-        from mien.exchange import readable_suffixes
-
         return sorted(readable_suffixes())
     except Exception as exc:  # a broken format module must not take the page down: offer every file instead
         # (only the file picker's filter depends on this; the server's clip endpoint names a bad suffix)
@@ -114,9 +117,6 @@ def viewer_controls() -> dict[str, Any]:
     metres; vertical ``fov_deg``; ``distance_m``), ``heads`` (head names a new character may use) and
     ``clip_suffixes`` (file suffixes the server reads as clips).
     """
-    from mien.affect.emotions import BLENDS, EMOTIONS, MAX_INTENSITY
-    from mien.affect.pad import PAD_FACTORS
-    from mien.rig.heads import HEADS
 
     return {
         "aus": _aus(),

@@ -19,6 +19,9 @@ from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from mien.viewer.controls import viewer_controls
+from mien.viewer.vendor import THREE_ENTRY, THREE_INSTALL_HINT, node_modules_dir, three_dir
+
 if TYPE_CHECKING:
     from fastapi import FastAPI
 
@@ -44,9 +47,6 @@ def mount(app: FastAPI) -> None:
     from fastapi import HTTPException
     from fastapi.responses import FileResponse, HTMLResponse, JSONResponse
     from fastapi.staticfiles import StaticFiles
-
-    from mien.viewer.controls import viewer_controls
-    from mien.viewer.vendor import THREE_ENTRY, THREE_INSTALL_HINT, node_modules_dir, three_dir
 
     three = three_dir()
     if three is None:

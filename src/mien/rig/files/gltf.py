@@ -58,6 +58,7 @@ SUPPORTED_EXTENSIONS: frozenset[str] = frozenset(
 )
 """Extensions a file may *require* and still load (material-only ones only change looks, which mien ignores)."""
 
+
 @dataclass(frozen=True, eq=False)
 class GltfNode:
     """One node: its name, world matrix and parent."""
