@@ -18,6 +18,7 @@ b'xyz'
 from __future__ import annotations
 
 import os
+import secrets
 import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -95,13 +96,32 @@ def write_bytes(data: bytes, target: Target) -> Path | None:
     return path
 
 
+_NEW_FILE_FLAGS = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_BINARY", 0)
+
+
 def temporary_path(path: str | os.PathLike[str]) -> Path:
     """A new empty file ``.<stem>.<random>.tmp<suffix>`` in ``path``'s folder (which must exist): where an
-    atomic write of ``path`` goes before its rename."""
+    atomic write of ``path`` goes before its rename.
+
+    Its permissions follow the user's umask as a plain ``open(path, "w")`` would (``0o666 & ~umask``, so
+    ``0644`` under the usual umask ``022``), not :func:`tempfile.mkstemp`'s private ``0600``: the file becomes
+    the output, and an output replacing a ``0644`` file stays ``0644``.
+
+    >>> temporary = temporary_path(Path(tempfile.mkdtemp()) / "take.csv")
+    >>> temporary.name.startswith(".take.") and temporary.name.endswith(".tmp.csv"), temporary.stat().st_size
+    (True, 0)
+    """
     path = Path(path)
-    handle, temporary = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}", dir=path.parent)
-    os.close(handle)
-    return Path(temporary)
+    for _ in range(tempfile.TMP_MAX):
+        temporary = path.with_name(f".{path.stem}.{secrets.token_hex(4)}.tmp{path.suffix}")
+        try:
+            # 0o666 and the kernel applies the umask (and a folder's default ACL): no process-wide os.umask() call.
+            handle = os.open(temporary, _NEW_FILE_FLAGS, 0o666)
+        except FileExistsError:
+            continue
+        os.close(handle)
+        return temporary
+    raise FileExistsError(f"{path.parent}: no free temporary name for {path.name}")
 
 
 @contextmanager
