@@ -231,11 +231,20 @@ def run_emotions(args: argparse.Namespace) -> int:
     result = emotions_result(args, heads)
     written = write_recognition(result, args.out)
     print(f"recognised (top label; blends: top two) over {len(result.scores)} renders, and the FACS reading:")
+    without_quality = 0
     for name in ("neutral", *EXPRESSIONS):
         if not result.subset(expression=name):
             continue  # not asked for
         facs = "" if name == "neutral" else f"   FACS reading {_percent(result.facs_rate(expression=name)):>4s}"
-        print(f"  {name:13s} {result.rate(expression=name):6.0%}   quality {result.quality(name):.2f}{facs}")
+        quality = result.quality(name)  # nan for a blend: no target label
+        without_quality += not math.isfinite(quality)
+        shown = f"{quality:.2f}" if math.isfinite(quality) else " n/a"
+        print(f"  {name:13s} {result.rate(expression=name):6.0%}   quality {shown}{facs}")
+    if without_quality:
+        print(
+            "  quality n/a: none of the classifier's 7 labels is a blend (a blend is recognised when its two"
+            " emotions' labels are the top two)"
+        )
     frontal = result.rate(expression=BASICS, view=FRONTAL)
     print(f"{', '.join(BASICS)}, frontal: {_percent(frontal)}")
     summary = result.framing_summary()

@@ -27,6 +27,7 @@ from mien.errors import InvalidValueError
 from mien.extras import require
 from mien.facs.arkit import ARKIT_INDEX, ARKIT_NAMES
 from mien.paths import require_asset
+from mien.tracking.native_logs import quiet_native_logs
 
 __all__ = ["MIN_CONFIDENCE", "NOT_ESTIMATED", "N_LANDMARKS", "FrameResult", "Landmarker", "head_pose_deg"]
 
@@ -99,7 +100,13 @@ class Landmarker:
         if not 0.0 <= min_confidence <= 1.0:
             raise InvalidValueError("min_confidence", min_confidence, "a number in [0, 1]")
         self.model_path: Path = require_asset("face_landmarker", model)
-        vision = _vision()
+        with quiet_native_logs():  # the log levels are set before mediapipe's first import
+            self._task = self._create(_vision(), mode, min_confidence)
+        self.mode = mode
+        self._last_ms = -1
+        self._blendshape_order: np.ndarray | None = None
+
+    def _create(self, vision: Any, mode: str, min_confidence: float) -> Any:
         from mediapipe.tasks.python import BaseOptions
 
         running_mode = vision.RunningMode.VIDEO if mode == "video" else vision.RunningMode.IMAGE
@@ -114,13 +121,10 @@ class Landmarker:
             min_tracking_confidence=min_confidence,
         )
         try:
-            self._task = vision.FaceLandmarker.create_from_options(options)
+            return vision.FaceLandmarker.create_from_options(options)
         except (RuntimeError, ValueError) as exc:
             expected = f"a MediaPipe face_landmarker.task ({exc})"
             raise InvalidValueError("model", str(self.model_path), expected) from None
-        self.mode = mode
-        self._last_ms = -1
-        self._blendshape_order: np.ndarray | None = None
 
     def __enter__(self) -> Landmarker:
         return self

@@ -26,6 +26,7 @@ from mien.errors import InvalidValueError, UnknownNameError
 from mien.extras import require
 from mien.paths import require_asset
 from mien.tracking.ibug68 import ibug68
+from mien.tracking.native_logs import quiet_native_logs
 from mien.validate.detector import EMOTION_LABELS
 
 __all__ = ["CROP_SCALE", "FRAMINGS", "EmotionClassifier", "crop_square", "face_box", "face_crop"]
@@ -112,10 +113,11 @@ class EmotionClassifier:
         _framing(framing)
         self.framing = framing
         self.model_path: Path = require_asset("emotion_model", model)
-        interpreter = require("ai_edge_litert.interpreter", "validate")
         try:
-            self._interpreter: Any = interpreter.Interpreter(model_path=str(self.model_path), num_threads=1)
-            self._interpreter.allocate_tensors()
+            with quiet_native_logs():  # "INFO: Created TensorFlow Lite XNNPACK delegate for CPU." on every run
+                interpreter = require("ai_edge_litert.interpreter", "validate")
+                self._interpreter: Any = interpreter.Interpreter(model_path=str(self.model_path), num_threads=1)
+                self._interpreter.allocate_tensors()
         except (RuntimeError, ValueError) as exc:
             expected = f"a TFLite emotion classifier ({exc})"
             raise InvalidValueError("emotion model", str(self.model_path), expected) from None
