@@ -9,8 +9,8 @@ A VRM 1.0 file is a GLB with the ``VRMC_vrm`` extension (VRM Consortium, VRM 1.0
   has no body; the bones let VRM apps load it). The mesh hangs from ``head``, so turning it turns the face;
 - ``expressions``: the 18 presets (happy, angry, sad, relaxed, surprised, the visemes aa ih ou ee oh, blink,
   blinkLeft/Right, lookUp/Down/Left/Right, neutral) as morph-target binds of mien's own faces on the head's ARKit
-  targets (``data/vrm_expressions.csv``: happy = the joy prototype's ARKit weights...), and one custom expression
-  per ARKit target the head has, named after it (the "perfect sync" apps drive);
+  targets (:data:`mien.rig.vrm_presets.PRESETS`: happy = the joy prototype's ARKit weights...), and one custom
+  expression per ARKit target the head has, named after it (the "perfect sync" apps drive);
 - ``meta``: the name, authors and licence fields, with VRM's own licence (``https://vrm.dev/licenses/1.0/``) and
   restrictive defaults (only the author may use the avatar as an avatar, personal non-profit use, no
   redistribution); ``meta=`` overrides any field. A head from a third party names its source and licence in
@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Mapping
-from functools import cache
 from typing import Any
 
 import numpy as np
@@ -39,11 +38,11 @@ from mien.facs.arkit import ARKIT_NAMES
 from mien.facs.clip import Clip
 from mien.facs.prototypes import prototype_vector
 from mien.fileio.streams import Source, TargetT, write_bytes
-from mien.fileio.tables import read_table
 from mien.rig.animate import face_to_rig
 from mien.rig.face_weights import clip_to_rig
 from mien.rig.heads import open_head
 from mien.rig.model import Rig
+from mien.rig.vrm_presets import PRESETS
 from mien.version import __version__
 
 __all__ = [
@@ -82,8 +81,6 @@ HEAD_LICENCES: dict[str, tuple[str, str]] = {
 }
 """Rig name -> (copyright line, licence URL) of third-party heads mien ships loaders for."""
 
-_TABLE = ("mien.exchange", "data/vrm_expressions.csv")
-
 # Humanoid bones below the head: name -> (parent, position in metres relative to the neck pivot, mien frame).
 # A T-pose of an adult about 1.7 m tall with the neck pivot at 1.5 m; only the hierarchy matters to VRM apps.
 _BODY: dict[str, tuple[str | None, tuple[float, float, float]]] = {
@@ -108,33 +105,21 @@ BIND_THRESHOLD = 0.01
 """Targets weighted less than this in an expression are left out of its binds."""
 
 
-@cache
-def _expression_rows() -> tuple[tuple[str, str, float, tuple[tuple[str, float], ...]], ...]:
-
-    rows = []
-    for row in read_table(*_TABLE):
-        pairs = []
-        for token in (row["arkit"] or "").split():
-            name, _, weight = token.partition(":")
-            pairs.append((name, float(weight)))
-        rows.append((row["expression"], row["emotion"] or "", float(row["intensity"] or 0.0), tuple(pairs)))
-    return tuple(rows)
-
-
-EXPRESSION_PRESETS: tuple[str, ...] = tuple(row[0] for row in _expression_rows())
-"""The VRM 1.0 preset expressions mien writes, in the table's order."""
+EXPRESSION_PRESETS: tuple[str, ...] = tuple(PRESETS)
+"""The VRM 1.0 preset expressions mien writes, in the table's order (:data:`mien.rig.vrm_presets.PRESETS`)."""
 
 
 def expression_weights(rig: Rig) -> dict[str, np.ndarray]:
-    """Preset -> (n_targets,) float32 weights 0..1 of ``rig``'s targets that make it (``data/vrm_expressions.csv``)."""
+    """Preset -> (n_targets,) float32 weights 0..1 of ``rig``'s targets that make it
+    (:data:`mien.rig.vrm_presets.PRESETS`)."""
 
     out = {}
-    for name, emotion, intensity, pairs in _expression_rows():
+    for name, preset in PRESETS.items():
         weights = np.zeros(len(rig.targets), np.float32)
-        if emotion:
-            face, _ = face_to_rig(rig, prototype_vector(emotion)[None] * intensity)
+        if preset.emotion:
+            face, _ = face_to_rig(rig, prototype_vector(preset.emotion)[None] * preset.intensity)
             weights += np.asarray(face[0], np.float32)
-        for target, weight in pairs:
+        for target, weight in preset.arkit:
             if target in rig.target_names:
                 weights[rig.target_index(target)] += weight
         out[name] = np.clip(weights, 0.0, 1.0)

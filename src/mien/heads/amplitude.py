@@ -9,7 +9,8 @@ against the reference table ``data/arkit_amplitudes.csv`` and scales a target th
 ``reference / amplitude``, at most :data:`MAX_GAIN` (a shape pushed further starts to show its sculpting's
 limits). Targets are never weakened. The gains are the rig's :attr:`~mien.rig.model.Rig.shape_gains` (reported
 by ``mien head inspect``), and a file head's name rows carry them, so a file written with the head's own names
-plays the same face.
+plays the same face. A rig driven through its VRM emotion presets is left as it is (its targets are blends of
+whole-face presets, whose strength is their author's choice).
 """
 
 from __future__ import annotations
@@ -61,6 +62,9 @@ def target_amplitudes(rig: Rig, names: tuple[str, ...] | None = None) -> dict[st
 
 def calibrate_amplitudes(rig: Rig) -> tuple[Rig, dict[str, float]]:
     """``rig`` with each timid ARKit target scaled toward the reference (see the module doc), and the gains."""
+    info = getattr(rig, "info", None)
+    if info is not None and info.names.presets:
+        return rig, {}  # whole-face presets, driven by projection: their strength is their author's
     reference = reference_amplitudes()
     measured = target_amplitudes(rig, tuple(reference))
     gains = {}

@@ -39,24 +39,35 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from mien.errors import InvalidValueError, UnknownNameError
 from mien.facs.arkit import ARKIT_NAMES
 from mien.facs.catalogue import FACE_CHANNELS
 from mien.rig.mapping import AUMapping
+from mien.rig.vrm_presets import preset_arkit, vrm1_name
 
 __all__ = [
     "CONVENTION_NAMES",
+    "PROJECTED_PRESETS",
     "Convention",
     "ConventionRow",
     "NameMatch",
     "au_costs",
     "load_convention",
     "match_names",
+    "preset_rows",
     "read_overrides",
 ]
 
 CONVENTION_NAMES: tuple[str, ...] = ("arkit", "livelink", "metahuman", "ict", "cc4", "rocketbox", "vrm1", "vrm0")
 """Shipped conventions, in the order ties in detection are broken."""
+
+PROJECTED_PRESETS: tuple[str, ...] = ("happy", "angry", "sad", "surprised")
+"""The VRM 1.0 emotion presets a VRM rig is driven through by projection (relaxed is a soft happy in mien's
+table, so it would share happy's weight: it stays the rig's own shape)."""
+PROJECTION_TOLERANCE = 1e-3
+"""Projection weights smaller than this are left out of the rows."""
 
 _COLUMNS = ("source", "arkit", "weight", "side")
 _SIDES = ("", "L", "R")
@@ -244,6 +255,8 @@ class NameMatch:
     """AU -> its missing targets, for AUs that lose part of their motion."""
     overrides: str = ""
     """The override file applied (empty when none)."""
+    presets: tuple[str, ...] = ()
+    """The rig's VRM emotion presets driven by projection (:func:`preset_rows`); empty for other rigs."""
 
     @property
     def arkit_targets(self) -> tuple[str, ...]:
@@ -260,6 +273,12 @@ class NameMatch:
             + (f"; overrides from {self.overrides}" if self.overrides else ""),
             f"matched {len(self.matched)} shape(s) onto {len(self.arkit_targets)} of {len(ARKIT_NAMES)} ARKit targets",
         ]
+        if self.presets:
+            lines.append(
+                f"driven through its VRM emotion presets ({', '.join(self.presets)}): each ARKit pose is projected "
+                "onto the faces mien gives these presets (least squares), so an emotion shows as its preset and an AU "
+                "as far as the presets resemble it"
+            )
         if self.unmatched:
             lines.append(
                 f"not matched ({len(self.unmatched)}, kept under their own names): {', '.join(self.unmatched)}"
@@ -306,10 +325,20 @@ def match_names(names: Sequence[str], convention: str | None = None, overrides: 
     for shape, replacement in replaced.items():
         by_source[shape] = list(replacement)
     found = _lookup(names, frozenset(by_source))
+    projected: dict[str, str] = {}
+    if chosen in ("vrm0", "vrm1"):
+        projected = {name: preset for name in names if name in found and found[name] not in replaced
+                     and (preset := vrm1_name(found[name])) in PROJECTED_PRESETS}  # fmt: skip
     rows = [
         ConventionRow(name, row.arkit, row.weight, row.side) for name in names if name in found
-        for row in by_source[found[name]]
+        and name not in projected for row in by_source[found[name]]
     ]  # fmt: skip
+    if len(projected) > 1:
+        rows += preset_rows(projected, {row.arkit for row in rows})
+    else:
+        rows += [ConventionRow(name, row.arkit, row.weight, row.side) for name in projected
+                 for row in by_source[found[name]]]  # fmt: skip
+        projected = {}
     matched = tuple(dict.fromkeys(row.source for row in rows))
     fed = {row.arkit for row in rows}
     missing = tuple(name for name in ARKIT_NAMES if name not in fed)
@@ -324,4 +353,27 @@ def match_names(names: Sequence[str], convention: str | None = None, overrides: 
         au_cannot_show=cannot,
         au_partly=partly,
         overrides=overrides.source if overrides else "",
+        presets=tuple(projected),
     )
+
+
+def preset_rows(presets: Mapping[str, str], direct: Iterable[str] = ()) -> list[ConventionRow]:
+    """Rows that drive a rig's VRM emotion presets by projection: ``presets`` maps the rig's shape -> its VRM 1.0
+    preset (:data:`PROJECTED_PRESETS`), ``direct`` names ARKit targets other shapes already feed (left out).
+
+    Each ARKit target k becomes ``sum_p P[k, p] * shape_p`` with ``P`` the pseudo-inverse of the presets' faces
+    (:func:`mien.rig.vrm_presets.preset_arkit`, one row each, over the targets not in ``direct``). An ARKit pose
+    ``a`` then weights the presets by ``a @ P``, its least-squares fit by the presets' faces: a frame of joy at the
+    preset's intensity gives happy 1 and the others 0; an ARKit target no preset's face uses stays missing.
+    """
+    names = list(presets)
+    faces = np.stack([preset_arkit(presets[name]) for name in names])
+    faces[:, [ARKIT_NAMES.index(name) for name in set(direct)]] = 0.0
+    inverse = np.linalg.pinv(faces)  # (52, n_presets)
+    rows = []
+    for k, arkit in enumerate(ARKIT_NAMES):
+        for j, name in enumerate(names):
+            weight = round(float(inverse[k, j]), 4)
+            if abs(weight) >= PROJECTION_TOLERANCE:
+                rows.append(ConventionRow(name, arkit, weight, ""))
+    return rows
