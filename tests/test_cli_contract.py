@@ -83,7 +83,7 @@ CASES: list[Case] = [
     case("render", "unsorted time", "render {d}/unsorted.csv -o {d}/r.png", "unsorted.csv", "line 4"),
     case("render", "zero fps", "render joy --fps 0", "--fps", "'0'"),
     case("render", "negative duration", "render joy --duration -1", "'-1'"),
-    case("render", "fps with a clip file", "render {d}/smile.csv --fps 30 -o {d}/r.png", "--fps", "own frame rate"),
+    case("render", "duration with a clip file", "render {d}/smile.csv --duration 3 -o {d}/r.png", "own length"),
     case("render", "output under a file", f"render joy -o {UNDER_FILE}.png", "some_file.txt is a file"),
     case("render", "huge request", "render joy --duration 1e9", "2 GiB"),
     # export

@@ -18,7 +18,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "textures and skin kept, its own shapes and head/eye bones animated), .vrm (VRM 1.0: the head with the "
         "VRM expression presets made from mien's emotion prototypes), .anim (Maya curves), .csv (time_s curves; "
         "--format arkit_csv for Live Link Face, --names file for the head file's own shape names), .json, .jsonl "
-        "(OpenFACS), .npz. Formats are in docs/FORMATS.md.",
+        "(OpenFACS; ARKit weights and laughter controllers become AU intensities by the NNLS solve of `mien "
+        "import --au`), .npz. Laughter-controller curves (`mien laugh -o x.anim`) reach a head through the "
+        "controllers' ARKit mapping; a head's targets beyond ARKit's 52 are skipped with a warning where the output "
+        "has no place for them. Formats are in docs/FORMATS.md.",
     )
     parser.add_argument("input", type=input_file, help="clip file to read")
     add_output(
@@ -48,11 +51,20 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(handler=run)
 
 
+AU_ONLY_FORMATS = ("openfacs_jsonl",)
+"""Output formats that carry AU intensities only (OpenFACS messages): weight and controller clips are solved
+into AUs for them."""
+
+ANY_CHANNEL_FORMATS = ("curves_csv", "clip_json", "clip_npz")
+"""Output formats that carry channels of any name."""
+
+
 def run(args: argparse.Namespace) -> int:
     import warnings
 
     from mien.commands._checks import refuse_option
-    from mien.exchange import format_for, format_module, reader_for
+    from mien.commands._clips import clip_vocabulary, read_input_clip, refuse_foreign_channels
+    from mien.exchange import format_for, format_module
 
     output_format = format_for(args.output, "write", args.format)
     carries_head = output_format in ("glb", "vrm")
@@ -66,13 +78,20 @@ def run(args: argparse.Namespace) -> int:
             refuse_option("--names", args.names, "give the character file with --head face.glb")
     elif not carries_head and (args.head is not None or args.identity is not None):
         refuse_option("--head", head_spec, f"{args.output.suffix} carries no head (only .glb and .vrm do)")
+    clip, messages = read_input_clip(args.input, args.input_format, "export")
+    notes = []
+    if output_format not in ANY_CHANNEL_FORMATS and not carries_head:
+        refuse_foreign_channels(clip, args.input)
+    if output_format in AU_ONLY_FORMATS and clip_vocabulary(clip) in ("arkit", "controllers"):
+        from mien.rig.face_weights import weights_to_au
+
+        notes.append(f"{clip_vocabulary(clip)} curves -> AU intensities (NNLS solve, as `mien import --au`)")
+        with warnings.catch_warnings(record=True) as solved:
+            warnings.simplefilter("always")
+            clip = weights_to_au(clip)
+        messages += [str(w.message) for w in solved]
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        clip = reader_for(args.input, args.input_format)(args.input)
-        if clip.n_frames == 0:
-            from mien.errors import InvalidValueError
-
-            raise InvalidValueError(str(args.input), "no frames", "a clip with at least one frame")
         if args.fps is not None:
             from mien.exchange.timing import resample
 
@@ -82,6 +101,7 @@ def run(args: argparse.Namespace) -> int:
             from mien.heads import load_head
 
             rig = load_head(args.head or "default", args.identity)
+            refuse_foreign_channels(clip, args.input, rig.target_names)
             if file_names:
                 write(clip, args.output, rig=rig, names="file")
                 done = f"with the shape names of {rig.name}"
@@ -91,7 +111,9 @@ def run(args: argparse.Namespace) -> int:
         else:
             write(clip, args.output)
             done = f"({output_format})"
-    for warning in caught:
-        print(f"mien export: warning: {warning.message}")
+    for message in [*messages, *(str(w.message) for w in caught)]:
+        print(f"mien export: warning: {message}")
+    for note in notes:
+        print(f"mien export: {note}")
     print(f"exported {clip.n_frames} frames at {clip.fps:g} fps {done}: {args.output}")
     return 0

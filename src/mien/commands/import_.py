@@ -18,8 +18,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="import a recording (Live Link Face / OpenFace CSV, OpenFACS .jsonl, .glb, .anim) as a mien clip",
         description="Read INPUT in any format mien reads and save it as a mien clip (-o, .npz or .json). OpenFace "
         "and OpenFACS files become AU clips; Live Link Face CSV and .glb become ARKit weight clips, or AU clips "
-        "with --au (a non-negative least-squares solve of the AU -> ARKit mapping). Skipped columns, keys and "
-        "untracked rows are reported as warnings.",
+        "with --au (a non-negative least-squares solve of the AU -> ARKit mapping; a head's targets beyond "
+        "ARKit's 52 are skipped with a warning); laughter-controller .anim curves stay controller curves, or "
+        "become AU clips with --au through the controllers' ARKit mapping. Skipped columns, keys and untracked "
+        "rows are reported as warnings.",
     )
     parser.add_argument("input", type=input_file, help="file to import")
     add_output(
@@ -30,7 +32,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         positional=True,
         help="mien clip to write: .npz or .json",
     )
-    parser.add_argument("--au", action="store_true", help="turn ARKit weights into AU intensities (0..5)")
+    parser.add_argument(
+        "--au", action="store_true", help="turn ARKit weights or laughter controllers into AU intensities (0..5)"
+    )
     parser.add_argument("--input-format", help="input format when its suffix and header do not tell")
     parser.set_defaults(handler=run)
 
@@ -39,26 +43,29 @@ def run(args: argparse.Namespace) -> int:
     import warnings
 
     from mien.commands._checks import refuse_option
+    from mien.commands._clips import clip_vocabulary, read_input_clip
     from mien.errors import InvalidValueError
-    from mien.exchange import reader_for, writer_for
-    from mien.facs.arkit import ARKIT_NAMES
+    from mien.exchange import writer_for
     from mien.facs.catalogue import FACE_CHANNELS
 
     if args.output.suffix.lower() not in CLIP_SUFFIXES:
         raise InvalidValueError("output", str(args.output), "a mien clip path ending in .npz or .json")
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        clip = reader_for(args.input, args.input_format)(args.input)
-    for warning in caught:
-        print(f"mien import: warning: {warning.message}")
-    if clip.n_frames == 0:
-        raise InvalidValueError(str(args.input), "no frames", "a recording with at least one frame")
+    clip, messages = read_input_clip(args.input, args.input_format, "import")
     if args.au:
-        if not any(c in ARKIT_NAMES for c in clip.channels):
+        vocabulary = clip_vocabulary(clip)
+        if vocabulary == "face":
             refuse_option("--au", True, f"{args.input.name} holds AU channels already, not ARKit weights")
+        if vocabulary == "other":
+            shown = ", ".join(clip.channels[:3])
+            refuse_option("--au", True, f"{args.input.name} holds no ARKit weights or laughter controllers ({shown})")
         from mien.rig.face_weights import weights_to_au
 
-        clip = weights_to_au(clip)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            clip = weights_to_au(clip)
+        messages += [str(w.message) for w in caught]
+    for message in messages:
+        print(f"mien import: warning: {message}")
     writer_for(args.output)(clip, args.output)
     kind = "AU" if all(c in FACE_CHANNELS for c in clip.channels) else "weight"
     shape = f"{clip.n_frames} frames at {clip.fps:g} fps ({kind} clip, {len(clip.channels)} channels)"

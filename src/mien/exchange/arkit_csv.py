@@ -177,8 +177,10 @@ def read(source: Source, timecode_fps: int | None = None) -> Clip:
 def write(clip: Clip, target: TargetT, rig: object = None, names: str = "arkit") -> TargetT:
     """Write ``clip`` as a Live Link Face CSV (see the module doc) to a path (atomically) or a binary stream.
 
-    ``clip``: ARKit names (weights 0..1) and optional pose channels (degrees), or face channels, which go
-    through the AU mapping. Missing ARKit channels are written as 0.
+    ``clip``: ARKit names (weights 0..1) and optional pose channels (degrees), face channels, which go
+    through the AU mapping, or laughter-controller curves, which go through the controllers' ARKit mapping.
+    Missing ARKit channels are written as 0; weight channels beyond ARKit's 52 (ICT's ``browInnerUpLeft``...)
+    have no column and are skipped with a warning.
 
     ``names="file"`` writes the columns under the own shape names of ``rig``, a head read from a character file
     (``--head face.glb``): one column per file shape its targets are built from, at the weights
@@ -204,10 +206,13 @@ def write(clip: Clip, target: TargetT, rig: object = None, names: str = "arkit")
         refuse_rig(rig, "Live Link Face .csv")
         weights = np.zeros((clip.n_frames, 52))
         poses = np.zeros((clip.n_frames, len(POSE_CHANNELS)))
+        skipped = [c for c in clip.channels if c not in ARKIT_NAMES and c not in POSE_CHANNELS]
+        if skipped:
+            warnings.warn(f"no Live Link Face column for {', '.join(skipped)}: skipped", stacklevel=2)
         for j, channel in enumerate(clip.channels):
             if channel in POSE_CHANNELS:
                 poses[:, POSE_CHANNELS.index(channel)] = clip.values[:, j]
-            else:
+            elif channel in ARKIT_NAMES:
                 weights[:, ARKIT_NAMES.index(channel)] = clip.values[:, j]
     else:
         refuse_rig(rig, "Live Link Face .csv")

@@ -24,7 +24,7 @@ from mien.render.face_paint import face_paint
 from mien.render.materials import textured_mesh_from_rig
 from mien.render.offscreen import DEFAULT_BACKGROUND, OffscreenRenderer
 from mien.render.textured import TexturedRenderer
-from mien.render.video import write_mp4, write_png
+from mien.render.video import termination_as_interrupt, write_mp4, write_png
 from mien.rig.deform import Deformer
 from mien.rig.model import Rig
 from mien.rig.pose import apply_pose
@@ -226,7 +226,8 @@ def render_clip(
     suffix, or an existing folder, gets ``frame_000000.png``, ... ``size`` is (width, height) in pixels
     (even for MP4). ``poses`` (n_frames, 5) degrees: head yaw/pitch/roll, gaze yaw/pitch, or None.
     ``samples`` multisample anti-aliasing: off by default for clips (4x MSAA costs 2-5x per frame on
-    llvmpipe); stills (:func:`render_still`) use 4.
+    llvmpipe); stills (:func:`render_still`) use 4. SIGTERM and SIGHUP stop it as Ctrl-C does
+    (:func:`~mien.render.video.termination_as_interrupt`): the frames so far are kept, no temporary file.
     """
     out = Path(out_path)
     w = _check_weights(rig, weights, None)
@@ -237,7 +238,7 @@ def render_clip(
         raise InvalidValueError("fps", fps, "frames per second > 0")
     if not _is_frame_folder(out) and any(int(side) % 2 for side in size):
         raise InvalidValueError("size", size, "an even width and height for H.264 (yuv420p)")
-    with make_renderer(rig, camera, size, background, samples) as renderer:
+    with termination_as_interrupt(), make_renderer(rig, camera, size, background, samples) as renderer:
         frames = progress_bar(
             iter_frames(rig, w, renderer, poses), total=len(w), desc=f"rendering {out.name}", enabled=progress
         )
