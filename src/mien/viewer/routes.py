@@ -2,11 +2,11 @@
 
 Routes added by :func:`mount`:
 
-- ``GET /``: ``static/index.html`` (or, when three.js is not installed, a 503 page that says to run ``npm ci``).
+- ``GET /``: ``static/index.html`` (or, when three.js is not installed, a 503 page that says how to get it).
 - ``GET /viewer/controls.json``: :func:`mien.viewer.controls.viewer_controls` (AUs, emotions, laughter...).
 - ``GET /viewer/{file}``: the page's own files under ``static/`` (``viewer.js``, ``viewer.css``).
-- ``GET /vendor/three/{path}``: files of the npm ``three`` package (see :mod:`mien.viewer.vendor`), which the
-  page's import map names for ``three`` and ``three/addons/``.
+- ``GET /vendor/three/{path}``: files of the npm ``three`` package, from the wheel or ``node_modules`` (see
+  :mod:`mien.viewer.vendor`), which the page's import map names for ``three`` and ``three/addons/``.
 
 The page itself talks to the server's WebSocket ``/ws`` and HTTP API ``/api`` (mounted by the server).
 """
@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from mien.viewer.controls import viewer_controls
-from mien.viewer.vendor import THREE_ENTRY, THREE_INSTALL_HINT, node_modules_dir, three_dir
+from mien.viewer.vendor import THREE_ENTRY, THREE_INSTALL_HINT, three_candidates, three_dir
 
 if TYPE_CHECKING:
     from fastapi import FastAPI
@@ -50,14 +50,14 @@ def mount(app: FastAPI) -> None:
 
     three = three_dir()
     if three is None:
-        where = node_modules_dir() / "three" / THREE_ENTRY
+        where = " or ".join(str(folder / THREE_ENTRY) for folder in three_candidates())
         log.warning("mien viewer: %s (looked for %s); / answers 503 until it is installed", THREE_INSTALL_HINT, where)
         missing_page = _MISSING_PAGE.format(hint=html.escape(THREE_INSTALL_HINT), where=html.escape(str(where)))
     controls = viewer_controls()
 
     @app.get("/", include_in_schema=False)
     def viewer_page() -> FileResponse | HTMLResponse:
-        """The viewer page, or a 503 page naming ``npm ci`` when three.js is not installed."""
+        """The viewer page, or a 503 page saying how to get three.js when it is not installed."""
         if three is None:
             return HTMLResponse(missing_page, status_code=503)
         return FileResponse(STATIC_DIR / "index.html", media_type="text/html", headers={"Cache-Control": "no-cache"})

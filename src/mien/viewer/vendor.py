@@ -1,7 +1,12 @@
-"""Where the viewer finds three.js: the npm ``node_modules`` folder (installed by ``npm ci``), never a CDN.
+"""Where the viewer finds three.js: in the installed package, or in an npm ``node_modules`` folder; never a CDN.
 
-Lookup order: ``$MIEN_NODE_MODULES`` if set, else the ``node_modules`` folder beside ``src/`` in a checkout
-(``Path(mien.__file__).parents[2] / "node_modules"``).
+A wheel carries the part of three.js the viewer loads, with its licence, in ``mien/viewer/three`` (copied from
+``node_modules/three`` when the wheel is built, by ``scripts/vendor_three.py``; the repository never holds
+three.js). Lookup order:
+
+1. ``$MIEN_NODE_MODULES/three`` when ``MIEN_NODE_MODULES`` is set (and only there: an explicit choice);
+2. ``three`` beside this module (``pip install 'mien[serve]'``);
+3. the ``node_modules`` folder beside ``src/`` in a checkout (``npm ci``; ``Path(mien.__file__).parents[2]``).
 """
 
 from __future__ import annotations
@@ -9,16 +14,20 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-__all__ = ["THREE_ENTRY", "THREE_INSTALL_HINT", "node_modules_dir", "three_dir"]
+__all__ = ["PACKAGED_THREE", "THREE_ENTRY", "THREE_INSTALL_HINT", "node_modules_dir", "three_candidates", "three_dir"]
 
 THREE_ENTRY = "build/three.module.js"
 """The ES module build of three.js, relative to the ``three`` package folder."""
 
+PACKAGED_THREE = Path(__file__).resolve().with_name("three")
+"""Where a wheel puts three.js (the npm package's layout, only the files the viewer loads)."""
+
 THREE_INSTALL_HINT = (
-    "three.js is not installed: run `npm ci` in the mien checkout (it installs node_modules/three from "
-    "package-lock.json), or set MIEN_NODE_MODULES to a node_modules folder that holds three"
+    "three.js is not installed: this mien was installed without the viewer's files (reinstall it from a wheel: "
+    "pip install 'mien[serve]'); in a mien checkout run `npm ci` (it installs node_modules/three from "
+    "package-lock.json); or set MIEN_NODE_MODULES to a node_modules folder that holds three"
 )
-"""What to tell a user whose node_modules lacks three.js."""
+"""What to tell a user when no three.js is found."""
 
 
 def node_modules_dir() -> Path:
@@ -29,7 +38,16 @@ def node_modules_dir() -> Path:
     return Path(__file__).resolve().parents[3] / "node_modules"  # src/mien/viewer/vendor.py -> checkout
 
 
+def three_candidates() -> list[Path]:
+    """The ``three`` folders looked in, in order (see the module doc)."""
+    if os.environ.get("MIEN_NODE_MODULES"):
+        return [node_modules_dir() / "three"]
+    return [PACKAGED_THREE, node_modules_dir() / "three"]
+
+
 def three_dir() -> Path | None:
-    """The installed ``three`` package folder (holding ``build/three.module.js``), or None when missing."""
-    folder = node_modules_dir() / "three"
-    return folder if (folder / THREE_ENTRY).is_file() else None
+    """The first ``three`` folder holding ``build/three.module.js`` (see the module doc), or None when missing."""
+    for folder in three_candidates():
+        if (folder / THREE_ENTRY).is_file():
+            return folder
+    return None
