@@ -46,6 +46,15 @@ def valid_avatars() -> list[Path]:
     return sorted(folder.glob("*.glb"))
 
 
+def valid_avatar(name: str = "White_F_1_Casual.glb") -> Path:
+    """One VALID avatar by file name (skips the test when absent, or when the heads extra is not installed)."""
+    path = next((p for p in valid_avatars() if p.name == name), None)
+    if path is None:
+        pytest.skip(f"VALID avatar {name} not available under $MIEN_SHARED/avatars/valid")
+    pytest.importorskip("meshopt", reason="the heads extra (pip install 'mien[heads]') is not installed")
+    return path
+
+
 def _shared(relative: str, what: str) -> Path:
     root = shared_root()
     if root is None or not (root / relative).exists():

@@ -3,15 +3,13 @@
 from __future__ import annotations
 
 import hashlib
-import http.server
-import threading
 import zipfile
 from collections.abc import Iterator
-from functools import partial
 from pathlib import Path
 
 import numpy as np
 import pytest
+from tests.loopback import serve_folder
 
 from mien.cli import main
 from mien.ports import free_port
@@ -35,21 +33,8 @@ def ict_zip(ict_dir: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[Pa
 @pytest.fixture(scope="module")
 def server(ict_zip: tuple[Path, str]) -> Iterator[str]:
     """A real HTTP server on 127.0.0.1 (ephemeral port) serving the zip's folder; yields its base URL."""
-    handler = partial(_QuietHandler, directory=str(ict_zip[0].parent))
-    httpd = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
-    thread = threading.Thread(target=httpd.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
-    thread.start()
-    try:
-        yield f"http://127.0.0.1:{httpd.server_address[1]}"
-    finally:
-        httpd.shutdown()
-        httpd.server_close()
-        thread.join(timeout=5)
-
-
-class _QuietHandler(http.server.SimpleHTTPRequestHandler):
-    def log_message(self, format: str, *args: object) -> None:
-        pass
+    with serve_folder(ict_zip[0].parent) as url:
+        yield url
 
 
 @pytest.fixture

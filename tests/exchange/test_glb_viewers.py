@@ -2,17 +2,15 @@
 
 from __future__ import annotations
 
-import functools
-import http.server
 import json
 import shutil
 import subprocess
-import threading
 from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 import pytest
+from tests.loopback import serve_folder
 
 from mien.exchange import glb
 from mien.facs.arkit import ARKIT_NAMES
@@ -91,26 +89,8 @@ def served(tmp_path: Path) -> Iterator[str]:
     (tmp_path / "index.html").write_text(PAGE)
     (tmp_path / "three").symlink_to(THREE)
     glb.write(open_jaw_clip(), tmp_path / "clip.glb", rig=builtin_head())
-    handler = functools.partial(_QuietHandler, directory=str(tmp_path))
-    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
-    thread = threading.Thread(target=server.serve_forever, daemon=True)
-    thread.start()
-    try:
-        yield f"http://127.0.0.1:{server.server_address[1]}"
-    finally:
-        server.shutdown()
-        server.server_close()
-        thread.join(timeout=5)
-
-
-class _QuietHandler(http.server.SimpleHTTPRequestHandler):
-    extensions_map = {  # noqa: RUF012 (the base class declares it as an instance attribute)
-        **http.server.SimpleHTTPRequestHandler.extensions_map,
-        ".js": "text/javascript",
-    }
-
-    def log_message(self, format: str, *args: object) -> None:
-        pass
+    with serve_folder(tmp_path) as url:
+        yield url
 
 
 def test_three_js_plays_the_animation_and_pixels_change(chromium, served: str, tmp_path: Path) -> None:

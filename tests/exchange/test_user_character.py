@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from tests.conftest import shared_root
+from tests.conftest import valid_avatar
 from tests.exchange.test_glb import validate
 
 from mien.exchange import arkit_csv, glb, vrm
@@ -21,8 +21,8 @@ from mien.facs.clip import Clip
 from mien.rig.files import load_head_file
 from mien.rig.files.gltf import read_gltf
 from mien.rig.heads import open_head
-from mien.rig.vrm_presets import preset_arkit
 from mien.rig.pose import head_rotation
+from mien.rig.vrm_presets import preset_arkit
 
 pytest.importorskip("meshopt", reason="needs the heads extra: pip install 'mien[heads]'")
 
@@ -33,11 +33,7 @@ REQUIRED_BONES = ("hips", "spine", "head", "leftUpperArm", "leftLowerArm", "left
 
 
 def _valid_avatar(name: str = "White_F_1_Casual.glb") -> Path:
-    root = shared_root()
-    path = None if root is None else root / "avatars" / "valid" / name
-    if path is None or not path.is_file():
-        pytest.skip("VALID avatars not available: set MIEN_SHARED to the shared folder (needs avatars/valid)")
-    return path
+    return valid_avatar(name)
 
 
 def _document(path: Path) -> tuple[dict[str, Any], bytes]:

@@ -3,9 +3,6 @@ avatar exported with a clip plays in three.js (meshopt decoder, WebP textures, s
 
 from __future__ import annotations
 
-import functools
-import http.server
-import threading
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -13,6 +10,7 @@ from typing import Any
 import numpy as np
 import pytest
 from tests.exchange.test_user_character import _valid_avatar, smile_clip
+from tests.loopback import serve_folder
 
 from mien.exchange import glb, vrm
 from mien.rig.heads import open_head
@@ -124,16 +122,6 @@ window.result = {
 )
 
 
-class _QuietHandler(http.server.SimpleHTTPRequestHandler):
-    extensions_map = {  # noqa: RUF012 (the base class declares it as an instance attribute)
-        **http.server.SimpleHTTPRequestHandler.extensions_map,
-        ".js": "text/javascript",
-    }
-
-    def log_message(self, format: str, *args: object) -> None:
-        pass
-
-
 @pytest.fixture(scope="module")
 def served(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, Path]]:
     """A loopback HTTP server with the pages, three.js and three-vrm from node_modules; files go in the folder."""
@@ -146,16 +134,8 @@ def served(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, Path
     (folder / "avatar.html").write_text(AVATAR_PAGE)
     (folder / "three").symlink_to(MODULES / "three")
     (folder / "three-vrm").symlink_to(MODULES / "@pixiv" / "three-vrm")
-    handler = functools.partial(_QuietHandler, directory=str(folder))
-    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
-    thread = threading.Thread(target=server.serve_forever, daemon=True)
-    thread.start()
-    try:
-        yield f"http://127.0.0.1:{server.server_address[1]}", folder
-    finally:
-        server.shutdown()
-        server.server_close()
-        thread.join(timeout=5)
+    with serve_folder(folder) as url:
+        yield url, folder
 
 
 def _run(chromium: Any, url: str, screenshot: Path) -> dict[str, Any]:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from tests.conftest import shared_root
+from tests.conftest import valid_avatar
 
 from mien.rig.heads import open_head
 from mien.rig.model import MorphTarget
@@ -16,12 +16,7 @@ from mien.server.head_view import _weight_matrix, frame_weights, head_view, refe
 
 
 def _valid_avatar() -> Path:
-    root = shared_root()
-    path = None if root is None else root / "avatars" / "valid" / "Asian_F_1_Casual.glb"
-    if path is None or not path.is_file():
-        pytest.skip("VALID avatars not available: set MIEN_SHARED to the shared folder (needs avatars/valid)")
-    pytest.importorskip("meshopt", reason="the heads extra (pip install 'mien[heads]') is not installed")
-    return path
+    return valid_avatar("Asian_F_1_Casual.glb")
 
 
 def test_a_named_head_is_shown_as_mien_glb_with_the_rig_weights() -> None:

@@ -462,13 +462,10 @@ def test_the_page_reconnects_when_the_server_comes_back(chromium: object) -> Non
 
 
 def _valid_avatar() -> Path:
-    from tests.conftest import shared_root
+    from tests.conftest import valid_avatar
 
-    root = shared_root()
-    path = None if root is None else root / "avatars" / "valid" / "Asian_F_1_Casual.glb"
-    if path is None or not path.is_file():
-        pytest.skip("VALID avatars not available: set MIEN_SHARED to the shared folder (needs avatars/valid)")
-    for module, extra in (("meshopt", "heads"), ("mediapipe", "track"), ("moderngl", "render")):
+    path = valid_avatar("Asian_F_1_Casual.glb")
+    for module, extra in (("mediapipe", "track"), ("moderngl", "render")):
         pytest.importorskip(module, reason=f"a head file needs the {extra} extra")
     return path
 
