@@ -40,8 +40,8 @@ def _copy_three(into: Path) -> None:
             print(f"mien: building without the viewer's three.js ({WITHOUT_THREE}=1): {exc}")
             return
         raise SystemExit(
-            f"mien: the viewer's three.js cannot be packaged: {exc}. Run `npm ci` in the checkout (or set "
-            f"MIEN_NODE_MODULES to a node_modules folder with three), or set {WITHOUT_THREE}=1 to build without it."
+            f"mien: the viewer's three.js cannot be packaged: {exc} (or set MIEN_NODE_MODULES to a node_modules "
+            f"folder with three), or set {WITHOUT_THREE}=1 to build without it."
         ) from None
     print(f"mien: {len(files)} files of three.js copied into {into}")
 
