@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from tests.loopback import serve_folder
+from tests.loopback import serve_folder, three_page
 
 from mien.exchange import glb
 from mien.facs.arkit import ARKIT_NAMES
@@ -20,22 +20,8 @@ from mien.rig.builtin_head import builtin_head
 REPO = Path(__file__).resolve().parents[2]
 THREE = REPO / "node_modules" / "three"
 
-PAGE = """<!doctype html>
-<html><body style="margin:0;background:#202020">
-<script type="importmap">
-{"imports": {"three": "/three/build/three.module.js", "three/addons/": "/three/examples/jsm/"}}
-</script>
-<script type="module">
-import * as THREE from "three";
-import { GLTFLoader } from "three/addons/loaders/GLTFLoader.js";
-const renderer = new THREE.WebGLRenderer({ antialias: false, preserveDrawingBuffer: true });
-renderer.setSize(256, 256);
-document.body.appendChild(renderer.domElement);
-const scene = new THREE.Scene();
-scene.add(new THREE.HemisphereLight(0xffffff, 0x404040, 2.0));
-const light = new THREE.DirectionalLight(0xffffff, 2.0);
-light.position.set(0.3, 0.5, 1.0);
-scene.add(light);
+PAGE = three_page(
+    """
 const camera = new THREE.PerspectiveCamera(30, 1, 0.01, 10);
 camera.position.set(0, -0.02, 0.55);
 const gltf = await new GLTFLoader().loadAsync("/clip.glb");
@@ -67,8 +53,8 @@ window.result = {
   duration: gltf.animations[0].duration,
   tracks: gltf.animations[0].tracks.map((t) => t.name),
 };
-</script></body></html>
 """
+)
 
 
 def open_jaw_clip() -> Clip:

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 import pytest
 from tests.exchange.test_user_character import _valid_avatar, smile_clip
-from tests.loopback import serve_folder
+from tests.loopback import serve_folder, three_page
 
 from mien.exchange import glb, vrm
 from mien.rig.heads import open_head
@@ -18,23 +18,7 @@ from mien.rig.heads import open_head
 REPO = Path(__file__).resolve().parents[2]
 MODULES = REPO / "node_modules"
 
-HEAD = """<!doctype html>
-<html><body style="margin:0;background:#202020">
-<script type="importmap">
-{"imports": {"three": "/three/build/three.module.js", "three/addons/": "/three/examples/jsm/",
-             "@pixiv/three-vrm": "/three-vrm/lib/three-vrm.module.js"}}
-</script>
-<script type="module">
-import * as THREE from "three";
-import { GLTFLoader } from "three/addons/loaders/GLTFLoader.js";
-const renderer = new THREE.WebGLRenderer({ antialias: false, preserveDrawingBuffer: true });
-renderer.setSize(256, 256);
-document.body.appendChild(renderer.domElement);
-const scene = new THREE.Scene();
-scene.add(new THREE.HemisphereLight(0xffffff, 0x404040, 2.0));
-const light = new THREE.DirectionalLight(0xffffff, 2.0);
-light.position.set(0.3, 0.5, 1.0);
-scene.add(light);
+COMMON = """
 const camera = new THREE.PerspectiveCamera(30, 1, 0.01, 10);
 function pixels() {
   renderer.render(scene, camera);
@@ -55,8 +39,8 @@ function changed(a, b, rowFrom, rowTo) {  // rows counted from the top of the im
 }
 """
 
-VRM_PAGE = (
-    HEAD
+VRM_PAGE = three_page(
+    COMMON
     + """
 import { VRMLoaderPlugin } from "@pixiv/three-vrm";
 const loader = new GLTFLoader();
@@ -83,12 +67,12 @@ window.result = {
   mouth: changed(before, after, 150, 200),
   top: changed(before, after, 0, 60),
 };
-</script></body></html>
-"""
+""",
+    imports={"@pixiv/three-vrm": "/three-vrm/lib/three-vrm.module.js"},
 )
 
-AVATAR_PAGE = (
-    HEAD
+AVATAR_PAGE = three_page(
+    COMMON
     + """
 import { MeshoptDecoder } from "three/addons/libs/meshopt_decoder.module.js";
 const loader = new GLTFLoader();
@@ -117,7 +101,6 @@ window.result = {
   jaw: face.morphTargetInfluences[face.morphTargetDictionary["h_expressions.MouthOpen_h"]],
   changed: changed(start, end, 0, 256),
 };
-</script></body></html>
 """
 )
 

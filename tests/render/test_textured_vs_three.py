@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from PIL import Image
 from tests.conftest import valid_avatar
-from tests.loopback import serve_folder
+from tests.loopback import serve_folder, three_page
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
@@ -33,23 +33,10 @@ CORRELATION_MIN = 0.9
 MEAN_COLOUR_MAX = 12.0
 """Largest difference of the mean R, G or B inside both silhouettes (measured at most 3)."""
 
-PAGE = """<!doctype html><html><body style="margin:0;background:#202020">
-<script type="importmap">{"imports": {"three": "/three/build/three.module.js",
-                                      "three/addons/": "/three/examples/jsm/"}}</script>
-<script type="module">
-import * as THREE from "three";
-import { GLTFLoader } from "three/addons/loaders/GLTFLoader.js";
+PAGE = three_page(
+    """
 import { MeshoptDecoder } from "three/addons/libs/meshopt_decoder.module.js";
 const view = JSON.parse(document.getElementById("view").textContent);
-const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
-renderer.setSize(view.size, view.size);
-renderer.setClearColor(0x202020);
-document.body.appendChild(renderer.domElement);
-const scene = new THREE.Scene();
-scene.add(new THREE.HemisphereLight(0xffffff, 0x404040, 2.0));
-const light = new THREE.DirectionalLight(0xffffff, 2.0);
-light.position.set(0.3, 0.5, 1.0);
-scene.add(light);
 const loader = new GLTFLoader();
 loader.setMeshoptDecoder(MeshoptDecoder);
 const gltf = await loader.loadAsync("/avatar.glb");
@@ -62,8 +49,10 @@ camera.position.set(...view.position);
 camera.lookAt(...view.target);
 renderer.render(scene, camera);
 window.done = true;
-</script><script type="application/json" id="view">VIEW</script></body></html>
-"""
+""",
+    size=SIZE,
+    antialias=True,
+)
 
 
 def _masks_and_scores(mien: np.ndarray, three: np.ndarray) -> tuple[float, float, float]:
@@ -82,7 +71,9 @@ def _three_image(chromium: Any, avatar: Path, view: dict[str, Any], folder: Path
     folder.mkdir()
     (folder / "three").symlink_to(THREE)
     (folder / "avatar.glb").symlink_to(avatar)
-    (folder / "index.html").write_text(PAGE.replace("VIEW", json.dumps(view)))
+    (folder / "index.html").write_text(
+        PAGE + f'<script type="application/json" id="view">{json.dumps(view)}</script>\n'
+    )
     page = chromium.new_page(viewport={"width": SIZE, "height": SIZE})
     errors: list[str] = []
     page.on("pageerror", lambda error: errors.append(str(error)))
