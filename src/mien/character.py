@@ -72,9 +72,13 @@ def _idle_settings(idle: IdleSettings | bool) -> IdleSettings | None:
     raise InvalidValueError("idle", idle, "True, False or an IdleSettings")
 
 
+MAX_SEED = 2**64 - 1
+"""Largest seed: the counter-based random (:mod:`mien.facs.counter_random`) keys on a uint64."""
+
+
 def _check_seed(seed: object) -> int:
-    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or int(seed) < 0:
-        raise InvalidValueError("seed", seed, "a non-negative integer")
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or not 0 <= int(seed) <= MAX_SEED:
+        raise InvalidValueError("seed", seed, "an integer 0..2**64-1 (the uint64 key of the counter-based random)")
     return int(seed)
 
 
@@ -172,7 +176,7 @@ class CharacterBatch:
         else:
             seeds_array = np.atleast_1d(np.asarray(seeds))
         if seeds_array.size and (seeds_array.dtype.kind not in "iu" or seeds_array.min() < 0):
-            raise InvalidValueError("seeds", seeds, "non-negative integer seeds")
+            raise InvalidValueError("seeds", seeds, "integer seeds 0..2**64-1")
         basis = _check_basis(expression_basis)
         mode = _check_mode(emotion_mode)
         settings = _idle_settings(idle)
@@ -185,9 +189,9 @@ class CharacterBatch:
         """The emotion layer (Broekens)."""
         self.idle = IdleBatch(np.zeros(0, np.int64))
         """The idle layer (rows without idle have every part off)."""
-        self.idle.add_rows(seeds_array.astype(np.int64), settings)
-        self.seeds = seeds_array.astype(np.int64)
-        """(n,) seed of each row (idle behaviour and default laughter seed)."""
+        self.idle.add_rows(seeds_array.astype(np.uint64), settings)
+        self.seeds = seeds_array.astype(np.uint64)
+        """(n,) uint64 seed of each row (idle behaviour and default laughter seed)."""
         self._active = np.ones(n, bool)
         self._features = np.full(n, basis == "feature_points")
         self._pad_mode = np.full(n, mode == "pad")
@@ -239,14 +243,19 @@ class CharacterBatch:
     ) -> int:
         """Add a neutral character and return its row (a freed row is reused first).
 
-        ``seed`` (int >= 0) seeds its idle behaviour and laughter; ``idle``: True, False or an
+        ``seed`` (int 0..2**64-1) seeds its idle behaviour and laughter; ``idle``: True, False or an
         :class:`IdleSettings`; ``expression_basis``: one of :data:`EXPRESSION_BASES`; ``emotion_mode``:
         ``"categorical"`` or ``"pad"`` (:meth:`set_pad` allowed). Its idle starts now.
+
+        Atomic: every argument is checked before any row changes, so a refused character leaves the batch as
+        it was (a half-added row would fail every later :meth:`step`).
         """
         value = _check_seed(seed)
         settings = _idle_settings(idle)
         basis = _check_basis(expression_basis)
         mode = _check_mode(emotion_mode)
+        if isinstance(idle, IdleSettings):
+            IdleBatch(np.array([value], np.uint64), settings)  # a dry run on a scratch row: refused settings fail here
         if self._free:
             row = self._free.pop(0)
             self.idle.reset_rows(np.array([row]), np.array([value]), settings, self.time_s)
@@ -255,7 +264,7 @@ class CharacterBatch:
             self.facs.add_rows(1)
             self.emotions.add_rows(1)
             self.idle.add_rows(np.array([value]), settings, self.time_s)
-            self.seeds = np.append(self.seeds, value)
+            self.seeds = np.concatenate([self.seeds, np.array([value], np.uint64)])
             self._active = np.append(self._active, False)
             self._features = np.append(self._features, False)
             self._pad_mode = np.append(self._pad_mode, False)
@@ -273,9 +282,9 @@ class CharacterBatch:
 
     def remove_character(self, row: int) -> None:
         """Free ``row``: its state is dropped, its frame is zeros, and the next :meth:`add_character` reuses it."""
-        index = int(self._rows(row)[0]) if isinstance(row, int | np.integer) else None
-        if index is None:
+        if isinstance(row, bool) or not isinstance(row, int | np.integer):
             raise InvalidValueError("row", row, "one active row index (int)")
+        index = int(self._rows(row)[0])  # checked before any state changes
         rows = np.array([index])
         self.facs.reset_rows(rows)
         self.emotions.reset_rows(rows)

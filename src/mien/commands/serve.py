@@ -1,4 +1,7 @@
-"""``mien serve``: the live server (OpenFACS UDP, WebSocket frames, HTTP API) until Ctrl-C."""
+"""``mien serve``: the live server (OpenFACS UDP, WebSocket frames, HTTP API) until Ctrl-C or SIGTERM.
+
+Both signals stop it the same clean way (sockets closed, exit 130 after Ctrl-C, 0 after SIGTERM), even when it
+was started with SIGINT ignored (a background job of a script): its own handlers replace the inherited ones."""
 
 from __future__ import annotations
 
@@ -23,7 +26,22 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--http-port", type=int, default=8000, metavar="PORT", help="HTTP + WebSocket port (default %(default)s)"
     )
     parser.add_argument("--tick-hz", type=float, default=60.0, help="clock rate in Hz (default %(default)s)")
+    parser.add_argument(
+        "--max-viewers",
+        type=int,
+        default=None,
+        metavar="N",
+        help="WebSocket viewers served at once; more are refused with close code 1013 and counted (default 200)",
+    )
     parser.add_argument("--token", help="access token (default: none on loopback, generated beyond)")
+    parser.add_argument(
+        "--allow-origin",
+        action="append",
+        default=[],
+        metavar="ORIGIN",
+        help="a web origin (http://localhost:3000) whose pages may use the server besides its own viewer "
+        "(repeatable; others get 403, see docs/SERVER.md, Security)",
+    )
     parser.add_argument(
         "--character",
         action="append",
@@ -43,8 +61,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     import asyncio
+    import contextlib
+    import dataclasses
     import logging
     import math
+    import signal
+    import sys
 
     from mien.errors import InvalidValueError, MienError
 
@@ -55,6 +77,8 @@ def run(args: argparse.Namespace) -> int:
             raise InvalidValueError(option, port, "a port 0..65535 (0 = any free port)")
     if args.udp_port and args.udp_port == args.http_port:
         raise InvalidValueError("--http-port", args.http_port, "a port other than --udp-port")
+    if args.max_viewers is not None and args.max_viewers < 0:
+        raise InvalidValueError("--max-viewers", args.max_viewers, "a number of viewers >= 0")
     from mien.extras import require
 
     require("mien.server.app", "serve")  # a missing fastapi/uvicorn names mien[serve]
@@ -67,10 +91,33 @@ def run(args: argparse.Namespace) -> int:
         for i, character_id in enumerate(ids)
     )
     config = ServeConfig(args.host, args.udp_port, args.http_port, args.tick_hz, args.token, specs)
+    config = dataclasses.replace(config, allow_origins=tuple(args.allow_origin))
+    if args.max_viewers is not None:
+        config = dataclasses.replace(config, max_viewers=args.max_viewers)
     logging.basicConfig(level=logging.WARNING, format="%(asctime)s %(name)s %(levelname)s: %(message)s")
     server = LiveServer(config)
+    received: list[int] = []
 
     async def main() -> None:
+        loop = asyncio.get_running_loop()
+        stop = asyncio.Event()
+
+        def on_signal(signum: int) -> None:
+            received.append(signum)
+            stop.set()
+
+        handled = []
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            with contextlib.suppress(NotImplementedError, RuntimeError, ValueError):  # Windows: Ctrl-C as before
+                loop.add_signal_handler(signum, on_signal, signum)
+                handled.append(signum)
+        try:
+            await _serve(stop)
+        finally:
+            for signum in handled:
+                loop.remove_signal_handler(signum)
+
+    async def _serve(stop: asyncio.Event) -> None:
         try:
             await server.start()
         except OSError as exc:
@@ -83,16 +130,22 @@ def run(args: argparse.Namespace) -> int:
         print(f"mien serve: OpenFACS UDP on {host}:{server.udp_port}", flush=True)
         print(f"mien serve: HTTP on http://{host}:{server.http_port}/{query} (OpenAPI: /openapi.json)", flush=True)
         print(f"mien serve: WebSocket frames on ws://{host}:{server.http_port}/ws{query}", flush=True)
-        print(f"mien serve: characters {', '.join(ids)} at {args.tick_hz:g} Hz; Ctrl-C stops", flush=True)
+        print(f"mien serve: characters {', '.join(ids)} at {args.tick_hz:g} Hz; Ctrl-C or SIGTERM stops", flush=True)
         if not is_loopback(args.host):
             print(f"mien serve: WARNING: listening beyond loopback; access token: {server.token}", flush=True)
         try:
             if args.check:
-                await asyncio.sleep(0.5)
+                with contextlib.suppress(asyncio.TimeoutError):
+                    await asyncio.wait_for(stop.wait(), 0.5)
             else:
-                await asyncio.Event().wait()
+                await stop.wait()
         finally:
             await server.stop()
 
     asyncio.run(main())
+    if signal.SIGINT in received:
+        print("interrupted", file=sys.stderr)
+        return 130
+    if received:
+        print("mien serve: stopped (SIGTERM)", file=sys.stderr)
     return 0

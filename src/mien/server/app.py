@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import ipaddress
 import logging
 import secrets
 import socket
@@ -21,28 +20,16 @@ from typing import Any
 
 from mien.errors import InvalidValueError
 from mien.extras import require
+from mien.server.guard import access_policy, is_loopback, origin_of
 from mien.server.registry import CharacterSpec, Registry
 from mien.server.scheduler import Clock
+from mien.server.stats import os_dropped_datagrams
 from mien.server.udp import OpenFacsEndpoint, open_udp
-from mien.server.websocket import Hub
+from mien.server.websocket import DEFAULT_MAX_VIEWERS, Hub
 
 __all__ = ["LiveServer", "ServeConfig", "ServerThread", "is_loopback", "serve"]
 
 log = logging.getLogger("mien.server")
-
-
-def is_loopback(host: str) -> bool:
-    """True for ``localhost`` and loopback addresses (127.0.0.0/8, ::1).
-
-    >>> is_loopback("127.0.0.1"), is_loopback("0.0.0.0")
-    (True, False)
-    """
-    if host == "localhost":
-        return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False
 
 
 @dataclass(frozen=True)
@@ -61,6 +48,11 @@ class ServeConfig:
     """Access token; None = none on loopback, a generated one beyond."""
     characters: tuple[CharacterSpec, ...] = (CharacterSpec("default"),)
     """Characters at start (the first is the default target of messages)."""
+    allow_origins: tuple[str, ...] = ()
+    """Web origins besides the server's own whose pages may use it (``http://localhost:3000``); see
+    :mod:`mien.server.guard`."""
+    max_viewers: int = DEFAULT_MAX_VIEWERS
+    """WebSocket viewers served at once; more are refused (close code 1013) and counted."""
 
     def __post_init__(self) -> None:
         for name in ("udp_port", "http_port"):
@@ -69,9 +61,13 @@ class ServeConfig:
                 raise InvalidValueError(name, port, "a port 0..65535 (0 = any free port)")
         if self.token is not None and len(self.token) < 8:
             raise InvalidValueError("token", "***", "a token of at least 8 characters")
+        for origin in self.allow_origins:
+            origin_of(origin)  # raises naming a malformed one
         ids = [spec.id for spec in self.characters]
         if len(set(ids)) != len(ids):
             raise InvalidValueError("characters", ids, "distinct character ids")
+        if isinstance(self.max_viewers, bool) or not isinstance(self.max_viewers, int) or self.max_viewers < 0:
+            raise InvalidValueError("max_viewers", self.max_viewers, "a number of viewers >= 0")
 
 
 class LiveServer:
@@ -85,7 +81,7 @@ class LiveServer:
         """The characters."""
         self.clock = Clock(self.registry, config.tick_hz)
         """The fixed-rate clock."""
-        self.hub = Hub(self.registry)
+        self.hub = Hub(self.registry, config.max_viewers)
         """The WebSocket viewers."""
         self.clock.listeners.append(self.hub.on_tick)
         self.token: str | None = config.token
@@ -122,7 +118,7 @@ class LiveServer:
             self._udp.close()
             raise
         self.http_port = int(sock.getsockname()[1])
-        app = create_app(self)
+        app = create_app(self, access_policy(host, self.config.allow_origins))
         config = uvicorn.Config(
             app, log_level="warning", lifespan="off", ws="websockets-sansio", access_log=False, ws_max_size=65536
         )
@@ -143,6 +139,26 @@ class LiveServer:
                 "(Authorization: Bearer TOKEN or ?token=TOKEN); UDP has no authentication",
                 host,
             )
+
+    def health_state(self) -> dict[str, Any]:
+        """What ``/api/health`` adds to the counters: ``status`` (``"ok"``, or ``"degraded"`` while ticks fail or
+        run late (:meth:`Clock.health <mien.server.scheduler.Clock.health>`) or a character is quarantined),
+        ``degraded`` (the reasons), ``quarantined`` (id -> why), ``datagrams_dropped_by_os`` (None where the system
+        does not say), ``viewers_refused``, ``max_viewers``, ``step_failures``."""
+        reasons = self.clock.health()
+        quarantined = dict(self.registry.quarantined)
+        if quarantined:
+            reasons.append("quarantined")
+        counters = self.registry.counters
+        return {
+            "status": "degraded" if reasons else "ok",
+            "degraded": reasons,
+            "quarantined": quarantined,
+            "datagrams_dropped_by_os": os_dropped_datagrams(self._udp.sock) if self._udp is not None else None,
+            "viewers_refused": counters.viewers_refused,
+            "max_viewers": self.hub.max_viewers,
+            "step_failures": counters.step_failures,
+        }
 
     async def stop(self) -> None:
         """Stop uvicorn, the clock and the UDP endpoint."""
@@ -176,7 +192,9 @@ class ServerThread:
     """A :class:`LiveServer` on its own event loop in a background thread (for tests, benchmarks, notebooks).
 
     Use as a context manager; :attr:`udp_port`, :attr:`http_port` and :attr:`server` are set once entered.
-    :meth:`call` runs a function on the server's loop (the registry is not thread-safe).
+    :meth:`call` runs a function on the server's loop. Changes through the registry (``add``, ``remove``,
+    ``submit``) may come from any thread (they hold ``Registry.lock`` and land between ticks); read its state
+    through :meth:`call`.
     """
 
     def __init__(self, config: ServeConfig) -> None:

@@ -5,13 +5,20 @@ calls :meth:`Registry.step`, which applies what is queued and steps ONE batch fo
 messages of a tick are written in one go (names resolved once in :data:`~mien.server.protocol.AU_CHANNELS`,
 one vectorised write of every row's targets); a bad or unservable message costs that message (a counted
 rejection), never the tick. :meth:`Registry.warm_up` does before the clock starts what is slow the first time.
+
+Changes may come from any thread: :meth:`~Registry.add`, :meth:`~Registry.remove`, :meth:`~Registry.submit` and
+each tick hold :attr:`Registry.lock`, so a change lands between two ticks, never inside one (a head load, the
+slow part of :meth:`~Registry.add`, runs before the lock is taken). A character whose step fails is quarantined
+(:meth:`Registry.quarantine`: its row freed, counted, its id kept until deleted) and the others keep moving.
 """
 
 from __future__ import annotations
 
+import copy
 import logging
 import math
 import re
+import threading
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
@@ -20,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from mien.character import EXPRESSION_BASES, CharacterBatch
+from mien.character import EXPRESSION_BASES, MAX_SEED, CharacterBatch
 from mien.errors import InvalidValueError, MienError, MissingExtraError, UnknownNameError
 from mien.extras import EXTRA_OF
 from mien.facs.catalogue import FACE_CHANNELS
@@ -34,12 +41,15 @@ from mien.server.head_view import HeadView, frame_weights, head_view
 from mien.server.protocol import AU_CHANNELS, N_AU_CHANNELS, Message, MessageRejected, Rejection, idle_parts
 from mien.server.stats import Counters, RateLimitedLog
 
-__all__ = ["MAX_EVENTS_PER_CHARACTER", "CharacterSpec", "Entry", "Registry"]
+__all__ = ["MAX_EVENTS_PER_CHARACTER", "MAX_QUARANTINE_TRIALS", "CharacterSpec", "Entry", "Registry"]
 
 log = logging.getLogger("mien.server")
 
 MAX_EVENTS_PER_CHARACTER = 256
 """Queued events (emotion, laugh, PAD, play) per character between two ticks; older ones are dropped."""
+
+MAX_QUARANTINE_TRIALS = 32
+"""Characters (newest first) tried one by one as the cause of a failed step before the batch is rebuilt."""
 
 _ID = re.compile(r"^[A-Za-z0-9_.\-]{1,64}$")
 
@@ -56,7 +66,7 @@ class CharacterSpec:
     identity: str | None = None
     """Identity preset of the head (None = the head's default); the file's path of a ``"file"`` head."""
     seed: int = 0
-    """Seed of the idle behaviour and laughter."""
+    """Seed of the idle behaviour and laughter (0..2**64-1)."""
     idle: bool = True
     """Idle behaviour (blinks, micro-motion, gaze) on or off."""
     expression_basis: str = "facs"
@@ -65,6 +75,12 @@ class CharacterSpec:
     def __post_init__(self) -> None:
         if not isinstance(self.id, str) or not _ID.match(self.id):
             raise InvalidValueError("id", self.id, "1-64 characters of A-Z a-z 0-9 _ . -")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or not 0 <= self.seed <= MAX_SEED:
+            raise InvalidValueError("seed", self.seed, "an integer 0..2**64-1 (18446744073709551615)")
+        if not isinstance(self.idle, bool):
+            raise InvalidValueError("idle", self.idle, "true or false")
+        if self.expression_basis not in EXPRESSION_BASES:
+            raise UnknownNameError("expression basis", self.expression_basis, EXPRESSION_BASES)
 
 
 @dataclass
@@ -108,9 +124,15 @@ class Registry:
         self.missing: dict[str, str] = {}
         """Message fields this install cannot serve (``"laugh"``) -> why (the missing extra): such messages are
         rejected as ``missing_extra`` on arrival."""
+        self.quarantined: dict[str, str] = {}
+        """Characters taken out of the batch because stepping them failed: id -> why (until DELETEd)."""
+        self.lock = threading.RLock()
+        """Held by each tick and each change (add, remove, submit), so changes from any thread land between ticks."""
         self._rigs: dict[tuple[str, str | None, bool], tuple[Any, Any]] = {}
         self._views: dict[tuple[str, str | None, bool], HeadView] = {}
+        self._loading = threading.Lock()  # head loads, one at a time; never held by a tick
         self._log = RateLimitedLog()
+        self._faults = RateLimitedLog(prefix="character fault")
 
     # ------------------------------------------------------------------ characters
 
@@ -127,38 +149,64 @@ class Registry:
         if spec.expression_basis not in EXPRESSION_BASES:
             raise UnknownNameError("expression basis", spec.expression_basis, EXPRESSION_BASES)
         key = _head_key(spec)
-        if key not in self._rigs:
-            rig = load_head(spec.head, spec.identity, feature_points=key[2])
-            driver = RigDriver(rig)
-            view = head_view(rig)
-            if view.note:
-                log.info("%s", view.note)
-            self._views[key] = view
-            self._rigs[key] = (rig, driver)
+        if key in self._rigs:  # no lock once loaded: the event loop calls this too
+            return self._rigs[key]
+        with self._loading:
+            if key not in self._rigs:
+                rig = load_head(spec.head, spec.identity, feature_points=key[2])
+                driver = RigDriver(rig)
+                view = head_view(rig)
+                if view.note:
+                    log.info("%s", view.note)
+                self._views[key] = view  # before _rigs: whoever finds the rig finds its view
+                self._rigs[key] = (rig, driver)
         return self._rigs[key]
 
     def add(self, spec: CharacterSpec) -> Entry:
-        """Create a character (raises :class:`InvalidValueError` if the id is taken, UnknownNameError for a
-        bad head or identity)."""
-        if spec.id in self.entries:
-            raise InvalidValueError("id", spec.id, "an id not in use (DELETE it first)")
-        rig, driver = self.prepare(spec)
-        row = int(  # "pad" mode: a live character takes PAD moves, and emotion events still add on top
-            self.batch.add_character(
-                seed=spec.seed, idle=spec.idle, expression_basis=spec.expression_basis, emotion_mode="pad"
+        """Create a character (raises :class:`InvalidValueError` if the id is taken or a value is refused,
+        UnknownNameError for a bad head or identity). Atomic: a refused character changes nothing."""
+        if not isinstance(spec, CharacterSpec):
+            raise InvalidValueError("spec", spec, "a CharacterSpec")
+        rig, driver = self.prepare(spec)  # slow the first time: before the lock, so no tick waits on it
+        with self.lock:
+            if spec.id in self.entries or spec.id in self.quarantined:
+                raise InvalidValueError("id", spec.id, "an id not in use (DELETE it first)")
+            row = int(  # "pad" mode: a live character takes PAD moves, and emotion events still add on top
+                self.batch.add_character(
+                    seed=spec.seed, idle=spec.idle, expression_basis=spec.expression_basis, emotion_mode="pad"
+                )
             )
-        )
-        entry = Entry(spec, row, rig, driver, view=self._views[_head_key(spec)])
-        if spec.idle:
-            entry.idle = IdleSettings()
-        self.entries[spec.id] = entry
+            entry = Entry(spec, row, rig, driver, view=self._views[_head_key(spec)])
+            if spec.idle:
+                entry.idle = IdleSettings()
+            self.entries[spec.id] = entry
         return entry
 
     def remove(self, character_id: str) -> None:
-        """Remove a character (its row is freed)."""
-        entry = self.get(character_id)
-        self.batch.remove_character(entry.row)
-        del self.entries[character_id]
+        """Remove a character (its row is freed), or forget a quarantined one."""
+        with self.lock:
+            if character_id in self.quarantined and character_id not in self.entries:
+                del self.quarantined[character_id]
+                return
+            entry = self.get(character_id)
+            self.batch.remove_character(entry.row)
+            del self.entries[character_id]
+
+    def quarantine(self, character_id: str, why: str, *, free_row: bool = True) -> None:
+        """Take a failing character out of the batch (its row freed unless ``free_row`` is False; its messages
+        are refused as ``unknown_character``) and count it; its id stays taken until :meth:`remove`."""
+        with self.lock:
+            entry = self.entries.pop(character_id, None)
+            if entry is None:
+                return
+            try:
+                if free_row:
+                    self.batch.remove_character(entry.row)
+            except Exception:  # a batch broken beyond freeing a row is rebuilt by step()
+                log.debug("freeing the row of quarantined %s failed", character_id, exc_info=True)
+            self.quarantined[character_id] = why[:300]
+            self.counters.quarantined += 1
+            self._faults.warn("quarantined", f"{character_id} quarantined (DELETE it to free the id): {why}")
 
     def get(self, character_id: str) -> Entry:
         """The character ``character_id`` (raises :class:`UnknownNameError`)."""
@@ -191,15 +239,18 @@ class Registry:
         character_id = message.character or default or self.default_id
         entry = self.entries.get(character_id) if character_id is not None else None
         if entry is None:
-            raise MessageRejected(Rejection.UNKNOWN_CHARACTER, f"character={character_id!r} does not exist")
+            why = self.quarantined.get(character_id or "")
+            detail = f"is quarantined ({why})" if why is not None else "does not exist"
+            raise MessageRejected(Rejection.UNKNOWN_CHARACTER, f"character={character_id!r} {detail}")
         if message.laugh is not None and "laugh" in self.missing:
             raise MessageRejected(Rejection.MISSING_EXTRA, f"laugh={message.laugh!r}: {self.missing['laugh']}")
-        if message.aus is not None:
-            if entry.state is not None:
-                self.counters.coalesced += 1
-            entry.state = message
-        if message.has_events:
-            entry.events.append(message)
+        with self.lock:
+            if message.aus is not None:
+                if entry.state is not None:
+                    self.counters.coalesced += 1
+                entry.state = message
+            if message.has_events:
+                entry.events.append(message)
         return entry
 
     def reject(self, error: MessageRejected) -> None:
@@ -315,11 +366,66 @@ class Registry:
             self.reject(MessageRejected(Rejection.INTERNAL_ERROR, f"{entry.spec.id}: {type(exc).__name__}: {exc}"))
 
     def step(self, t_s: float) -> np.ndarray:
-        """Apply queued commands and step every character to ``t_s``; returns the (n_rows, 62) frames."""
-        self.apply_pending(t_s)
-        self.frames = self.batch.step(t_s)
-        self.time_s = t_s
-        return self.frames
+        """Apply queued commands and step every character to ``t_s``; returns the (n_rows, 62) frames.
+
+        Never raises for a failing character: the one whose removal lets the step through is quarantined
+        (:meth:`quarantine`); failing that, the batch is rebuilt from the characters' specs."""
+        with self.lock:
+            self.apply_pending(t_s)
+            try:
+                self.frames = self.batch.step(t_s)
+            except Exception as exc:
+                self.frames = self._recover(t_s, exc)
+            self.time_s = t_s
+            return self.frames
+
+    def _recover(self, t_s: float, error: Exception) -> np.ndarray:
+        """Frames at ``t_s`` after ``self.batch.step`` raised ``error``: step a copy without each character in
+        turn (newest first, up to :data:`MAX_QUARANTINE_TRIALS`); the first copy that steps becomes the batch
+        and that character is quarantined. If none does, :meth:`_rebuild`."""
+        self.counters.step_failures += 1
+        why = f"{type(error).__name__}: {error}"[:200]
+        self._faults.warn("step", f"stepping the characters at t={t_s:.3f} s failed: {why}", error)
+        for entry in list(reversed(self.entries.values()))[:MAX_QUARANTINE_TRIALS]:
+            trial = copy.deepcopy(self.batch)
+            try:
+                trial.remove_character(entry.row)
+                frames = trial.step(t_s)
+            except Exception:
+                continue
+            self.batch = trial
+            self.quarantine(entry.spec.id, f"stepping it failed: {why}")
+            return frames
+        return self._rebuild(t_s, why)
+
+    def _rebuild(self, t_s: float, why: str) -> np.ndarray:
+        """A new batch holding every character afresh (held AUs, emotions and clips are lost; rows may change),
+        quarantining any the new batch refuses; stepped to ``t_s``."""
+        log.warning("rebuilding the batch of %d characters after a failed step (%s)", len(self.entries), why)
+        batch = CharacterBatch(0, tick_hz=self.batch.tick_hz)
+        batch.step(max(t_s, 0.0))  # idle starts at t_s, not at 0
+        refused: list[tuple[str, str]] = []
+        for entry in list(self.entries.values()):
+            try:
+                entry.row = batch.add_character(
+                    seed=entry.spec.seed,
+                    idle=entry.idle if entry.idle is not None else False,
+                    expression_basis=entry.spec.expression_basis,
+                    emotion_mode="pad",
+                )
+            except Exception as exc:
+                refused.append((entry.spec.id, f"re-adding it failed: {type(exc).__name__}: {exc}"))
+            entry.state, entry.clips = None, []
+            entry.events.clear()
+        self.batch = batch
+        for character_id, reason in refused:
+            self.quarantine(character_id, reason, free_row=False)  # it has no row in the new batch
+        self.counters.rebuilds += 1
+        try:
+            return self.batch.step(t_s)
+        except Exception as exc:  # nothing left to try this tick: neutral faces, and the next tick tries again
+            self._faults.warn("rebuild", f"the rebuilt batch failed too: {type(exc).__name__}: {exc}", exc)
+            return np.zeros((self.batch.n_characters, len(FACE_CHANNELS)))
 
     def rig_output(self, entry: Entry) -> tuple[np.ndarray, np.ndarray]:
         """``(weights (n_targets,) float32, pose (5,) degrees)`` of ``entry`` at the last step."""

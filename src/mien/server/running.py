@@ -4,7 +4,7 @@ not import each other; tests may pass any object with these attributes)."""
 
 from __future__ import annotations
 
-from typing import Protocol
+from typing import Any, Protocol
 
 from mien.server.registry import Registry
 from mien.server.scheduler import Clock
@@ -26,3 +26,9 @@ class RunningServer(Protocol):
     """Access token for HTTP and WebSocket, or None."""
     started_monotonic: float
     """``time.monotonic()`` at start (the health endpoint's uptime)."""
+
+    def health_state(self) -> dict[str, Any]:
+        """``status`` (``"ok"`` or ``"degraded"``), ``degraded`` (reasons), ``quarantined``,
+        ``datagrams_dropped_by_os``, ``viewers_refused``, ``max_viewers``, ``step_failures``: see
+        :meth:`mien.server.app.LiveServer.health_state`."""
+        ...

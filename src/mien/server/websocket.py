@@ -1,6 +1,8 @@
 """The WebSocket stream: one binary frame per tick to each viewer (see :mod:`mien.server.protocol` for the
 format), JSON commands from viewers. A slow viewer never blocks the clock: each viewer has a one-frame slot
-that keeps only the newest frame."""
+that keeps only the newest frame. At most :attr:`Hub.max_viewers` viewers are served (``mien serve
+--max-viewers``): each costs the loop a send per tick, so past the cap a new one is closed with code 1013 ("try
+again later") and counted (``viewers_refused``) instead of slowing the clock for everyone."""
 
 from __future__ import annotations
 
@@ -9,12 +11,21 @@ import contextlib
 import logging
 from typing import Any
 
+from mien.errors import InvalidValueError
 from mien.server.protocol import MessageRejected, Rejection, encode_frame, parse_message
 from mien.server.registry import Registry
+from mien.server.stats import RateLimitedLog
 
-__all__ = ["Hub", "Viewer"]
+__all__ = ["DEFAULT_MAX_VIEWERS", "TRY_AGAIN_LATER", "Hub", "Viewer"]
 
 log = logging.getLogger("mien.server")
+
+DEFAULT_MAX_VIEWERS = 200
+"""Viewers served at once by default (bench/server_viewers.py: the clock keeps its rate with this many viewers
+that never read)."""
+
+TRY_AGAIN_LATER = 1013
+"""WebSocket close code of a viewer refused because the server is full (RFC 6455 registry: Try Again Later)."""
 
 
 class Viewer:
@@ -32,10 +43,15 @@ class Viewer:
 class Hub:
     """Viewers and the per-tick fan-out (register :meth:`on_tick` with the clock)."""
 
-    def __init__(self, registry: Registry) -> None:
+    def __init__(self, registry: Registry, max_viewers: int = DEFAULT_MAX_VIEWERS) -> None:
+        if isinstance(max_viewers, bool) or not isinstance(max_viewers, int) or max_viewers < 0:
+            raise InvalidValueError("max_viewers", max_viewers, "a number of viewers >= 0")
         self.registry = registry
+        self.max_viewers = max_viewers
+        """Most viewers served at once; more are closed with :data:`TRY_AGAIN_LATER` and counted."""
         self.viewers: set[Viewer] = set()
         """Connected viewers."""
+        self._log = RateLimitedLog(prefix="viewer refused")
 
     def on_tick(self, tick: int, t_s: float) -> None:
         """Encode one frame per watched character and hand it to its viewers (drops their older frame)."""
@@ -48,12 +64,7 @@ class Hub:
             if watching is None:
                 continue
             if watching not in frames:
-                entry = self.registry.entries.get(watching)
-                if entry is None:
-                    frames[watching] = None
-                else:
-                    weights, pose = self.registry.frame_output(entry)
-                    frames[watching] = encode_frame(tick, entry.row, t_s, pose, weights)
+                frames[watching] = self._frame(watching, tick, t_s)
             data = frames[watching]
             if data is None:
                 continue
@@ -63,8 +74,28 @@ class Hub:
             counters.frames_sent += 1
             viewer.ready.set()
 
+    def _frame(self, character_id: str, tick: int, t_s: float) -> bytes | None:
+        """The frame of ``character_id`` at this tick (None: no such character, or its output failed, which
+        quarantines it rather than costing every other viewer its frame)."""
+        entry = self.registry.entries.get(character_id)
+        if entry is None:
+            return None
+        try:
+            weights, pose = self.registry.frame_output(entry)
+            return encode_frame(tick, entry.row, t_s, pose, weights)
+        except Exception as exc:
+            self.registry.quarantine(character_id, f"its frame failed: {type(exc).__name__}: {exc}"[:200])
+            return None
+
     async def serve(self, websocket: Any, watching: str | None) -> None:
-        """Run one viewer connection (a Starlette ``WebSocket``, already accepted) until it closes."""
+        """Run one viewer connection (a Starlette ``WebSocket``, already accepted) until it closes; past
+        :attr:`max_viewers`, close it at once with :data:`TRY_AGAIN_LATER` (counted as ``viewers_refused``)."""
+        if len(self.viewers) >= self.max_viewers:
+            self.registry.counters.viewers_refused += 1
+            self._log.warn("full", f"the server serves its maximum of {self.max_viewers} viewers (--max-viewers)")
+            with contextlib.suppress(Exception):
+                await websocket.close(code=TRY_AGAIN_LATER, reason=f"server full ({self.max_viewers} viewers)")
+            return
         viewer = Viewer(watching)
         self.viewers.add(viewer)
         sender = asyncio.create_task(self._send(websocket, viewer))
