@@ -6,23 +6,27 @@ b'{"AU1": 0, "AU2": 0, "AU4": 0, "AU5": 0,'
 
 ``UdpClient("127.0.0.1", 5000).send({"AU12": 3}, speed=0.1)`` sends the exact OpenFACS dict (the 18 AUs in
 its order, then ``Speed``), so the original server would read it too; extensions (left/right AUs, emotion,
-laughter, PAD, a character id) follow. :class:`WebSocketClient` receives decoded frames and sends commands.
+laughter, PAD, a character id) follow. UDP has no reply: nothing tells the sender that a datagram arrived or
+was refused; :class:`HttpClient` asks the server (its characters, its counters of accepted and refused
+messages). :class:`WebSocketClient` receives decoded frames and sends commands.
 """
 
 from __future__ import annotations
 
 import json
 import socket
+import urllib.error
+import urllib.request
 from collections.abc import Mapping
 from contextlib import ExitStack
 from typing import Any
-from urllib.parse import urlencode
+from urllib.parse import quote, urlencode
 
 from mien.errors import InvalidValueError, MienError
 from mien.extras import require
 from mien.server.protocol import OPENFACS_KEYS, Frame, decode_frame
 
-__all__ = ["AsyncWebSocketClient", "UdpClient", "WebSocketClient", "openfacs_message"]
+__all__ = ["AsyncWebSocketClient", "HttpClient", "UdpClient", "WebSocketClient", "openfacs_message"]
 
 
 def openfacs_message(aus: Mapping[str, float], speed: float = 0.05, **extensions: Any) -> bytes:
@@ -82,6 +86,52 @@ class UdpClient:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+class HttpClient:
+    """Read a running server's state over its HTTP API (standard library only): ``health()``, ``characters()``.
+
+    ``base_url`` is like ``http://127.0.0.1:8000``; ``token`` is the server's access token, if it has one.
+    """
+
+    def __init__(self, base_url: str = "http://127.0.0.1:8000", token: str | None = None, timeout_s: float = 5.0):
+        if not base_url.startswith(("http://", "https://")):
+            raise InvalidValueError("url", base_url, "an http:// URL such as http://127.0.0.1:8000")
+        self.base_url = base_url.rstrip("/")
+        """``http://host:port`` of the server."""
+        self._token = token
+        self._timeout_s = timeout_s
+
+    def get(self, path: str) -> Any:
+        """The JSON answer of ``GET path``; raises :class:`~mien.errors.MienError` saying what went wrong."""
+        request = urllib.request.Request(f"{self.base_url}{path}", headers={"Accept": "application/json"})
+        if self._token is not None:
+            request.add_header("Authorization", f"Bearer {self._token}")
+        try:
+            with urllib.request.urlopen(request, timeout=self._timeout_s) as response:
+                return json.loads(response.read())
+        except urllib.error.HTTPError as exc:
+            detail = exc.read().decode(errors="replace")[:200]
+            exc.close()
+            hint = "; give the server's --token" if exc.code == 401 else ""
+            raise MienError(f"{self.base_url}{path} answered {exc.code}: {detail}{hint}") from None
+        except (OSError, ValueError) as exc:
+            reason = getattr(exc, "reason", exc)
+            raise MienError(
+                f"cannot reach {self.base_url} ({reason}); is `mien serve` running there (its --http-port)?"
+            ) from None
+
+    def health(self) -> dict[str, Any]:
+        """``/api/health``: uptime, clock and message counters, rejections per reason."""
+        return dict(self.get("/api/health"))
+
+    def characters(self) -> list[str]:
+        """The server's character ids, in creation order (the first is the default target)."""
+        return [str(item["id"]) for item in self.get("/api/characters")]
+
+    def character(self, character_id: str) -> dict[str, Any]:
+        """The character's face at the last tick (``aus``, ``pose_deg``, ``weights``)."""
+        return dict(self.get(f"/api/characters/{quote(character_id)}"))
 
 
 def _ws_url(url: str, character: str | None, token: str | None) -> str:

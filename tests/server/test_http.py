@@ -108,11 +108,12 @@ def test_clip_upload_plays_on_the_character(live, wait_until) -> None:
     write(clip, buffer)
     data = buffer.getvalue()
     url = f"{live.base_url}/api/characters/b/clip"
-    assert httpx.post(url, params={"suffix": ".json"}, content=data).status_code == 202
+    binary = {"content-type": "application/octet-stream"}  # the upload's one content type (docs/SERVER.md)
+    assert httpx.post(url, params={"suffix": ".json"}, content=data, headers=binary).status_code == 202
     wait_until(lambda: httpx.get(f"{live.base_url}/api/characters/b").json()["aus"]["AU12L"] > 3.9, what="clip")
-    bad = httpx.post(url, params={"suffix": ".json"}, content=b"\x00\x01 not a clip")
+    bad = httpx.post(url, params={"suffix": ".json"}, content=b"\x00\x01 not a clip", headers=binary)
     assert bad.status_code == 400 and "clip" in bad.text
-    assert httpx.post(url, params={"suffix": ".exe"}, content=data).status_code == 400
+    assert httpx.post(url, params={"suffix": ".exe"}, content=data, headers=binary).status_code == 400
 
 
 def test_head_glb_route_matches_the_frame_weight_order(live) -> None:

@@ -6,6 +6,7 @@ import json
 
 from mien.errors import InvalidValueError
 from mien.facs.clip import Clip
+from mien.fileio.limits import check_count, current
 from mien.fileio.streams import Source, TargetT, read_text, refuse_rig, source_name, write_text
 
 __all__ = ["SUFFIXES", "read", "write"]
@@ -25,6 +26,8 @@ def read(source: Source) -> Clip:
     """Read a clip written by :func:`write`; bad JSON raises naming the file, line and column."""
     name = source_name(source)
     text = read_text(source)
+    # every value but one follows a comma: a bound known before json builds a Python float per value
+    check_count(name, "commas (one per value)", text.count(","), current().clip_values)
     try:
         data = json.loads(text)
     except json.JSONDecodeError as exc:
@@ -32,6 +35,9 @@ def read(source: Source) -> Clip:
     if not isinstance(data, dict) or not {"fps", "channels", "values"} <= set(data):
         keys = sorted(data) if isinstance(data, dict) else type(data).__name__
         raise InvalidValueError(f"{name}", keys, 'an object with "fps", "channels" and "values"')
+    values, channels = data["values"], data["channels"]
+    if isinstance(values, list) and isinstance(channels, list):
+        check_count(name, "values (frames x channels)", len(values) * len(channels), current().clip_values)
     try:
         return Clip.from_dict(data)
     except (TypeError, ValueError) as exc:

@@ -2,7 +2,8 @@
 
 The CSV formats (plain curves, Live Link Face, OpenFace) all come through :func:`read_columns`: header names are
 stripped of surrounding spaces (OpenFace writes ``frame, timestamp, ...``), only the wanted columns are
-converted, and every bad cell (not a number, NaN, infinite), short row (a truncated file) or missing column
+converted (into one array sized from the line count, checked against :mod:`mien.fileio.limits` first), and
+every bad cell (not a number, NaN, infinite), short row (a truncated file) or missing column
 raises :class:`~mien.errors.InvalidValueError` with ``FILE line L column C (NAME)``.
 
 >>> import io
@@ -13,12 +14,14 @@ raises :class:`~mien.errors.InvalidValueError` with ``FILE line L column C (NAME
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from mien.errors import InvalidValueError
+from mien.fileio.limits import check_count, current
 from mien.fileio.streams import Source, read_text, source_name
 
 __all__ = ["CsvColumns", "check_increasing", "columns_from_text", "read_columns"]
@@ -81,8 +84,11 @@ def columns_from_text(
         raise InvalidValueError(f"{name} line {header_line + 1}", f"no column {shown}", "those columns in the header")
     positions = [header.index(n) for n in names]
     convert = [(parsers or {}).get(n, float) for n in names]
-    rows: list[list[float]] = []
-    numbers: list[int] = []
+    most_rows = len(lines) - header_line - 1
+    check_count(name, "values (rows x columns)", most_rows * max(len(names), 1), current().clip_values)
+    array = np.empty((most_rows, len(names)), dtype=np.float64)  # one row at a time: no list of every cell
+    numbers = np.empty(most_rows, dtype=np.int64)
+    count = 0
     width = len(header)
     for index in range(header_line + 1, len(lines)):
         line = lines[index]
@@ -92,22 +98,23 @@ def columns_from_text(
         if len(cells) != width:
             hint = " (a truncated file?)" if index == len(lines) - 1 and len(cells) < width else ""
             raise InvalidValueError(f"{name} line {index + 1}", f"{len(cells)} cells{hint}", f"{width} as the header")
-        row = []
+        row: list[float] = []
         for position, column, parse in zip(positions, names, convert, strict=True):
             cell = cells[position]
             try:
                 value = parse(cell)
             except ValueError:
                 value = float("nan")
-            if not np.isfinite(value):
+            if not math.isfinite(value):  # math, not numpy: ten times faster per cell
                 where = f"{name} line {index + 1} column {position + 1} ({column})"
                 raise InvalidValueError(where, cell.strip(), "a finite number")
             row.append(value)
-        rows.append(row)
-        numbers.append(index + 1)
-    array = np.array(rows, dtype=np.float64).reshape(len(rows), len(names))
+        array[count] = row
+        numbers[count] = index + 1
+        count += 1
+    array = array[:count].copy() if count < most_rows else array
     values = {column: array[:, j] for j, column in enumerate(names)}
-    return CsvColumns(name, header, values, np.array(numbers, dtype=np.int64))
+    return CsvColumns(name, header, values, numbers[:count].copy())
 
 
 def check_increasing(table: CsvColumns, column: str) -> None:

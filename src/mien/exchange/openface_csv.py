@@ -32,6 +32,7 @@ from mien.exchange.timing import uniform_clip
 from mien.facs.catalogue import FACE_AU_CODES, FACE_CHANNELS, au_channels
 from mien.facs.clip import Clip
 from mien.facs.intensity import MAX_INTENSITY
+from mien.fileio.limits import check_count, current
 from mien.fileio.streams import Source, read_text, source_name
 
 __all__ = ["PRESENCE_INTENSITY", "SUFFIXES", "read", "sniff"]
@@ -93,6 +94,7 @@ def read(source: Source) -> Clip:
         if bad.size:
             where, value = table.where(int(bad[0]), column), float(values[bad[0]])
             raise InvalidValueError(where, value, f"an intensity in 0..{MAX_INTENSITY:g}")
+    check_count(name, "values (frames x channels)", n_rows * len(FACE_CHANNELS), current().clip_values)
     values = np.zeros((n_rows, len(FACE_CHANNELS)))
     for code, column in used_r.items():
         values[:, list(au_channels(code))] = table.values[column][:, None]

@@ -31,6 +31,7 @@ from mien.exchange.timing import uniform_clip
 from mien.facs.catalogue import FACE_AU_CODES, FACE_CHANNELS, OPENFACS_AUS, POSE_CHANNELS, au_channels
 from mien.facs.clip import Clip
 from mien.facs.intensity import MAX_INTENSITY
+from mien.fileio.limits import check_count, current
 from mien.fileio.streams import Source, TargetT, read_text, refuse_rig, source_name, write_text
 
 __all__ = ["SUFFIXES", "TIME_KEY", "read", "write"]
@@ -88,10 +89,12 @@ def _intensity(value: Any, where: str, key: str) -> float:
 def read(source: Source) -> Clip:
     """Read OpenFACS JSON lines as a face-channel clip; bad lines raise naming the file, line and key."""
     name = source_name(source)
+    lines = read_text(source).splitlines()
+    check_count(name, "values (lines x channels)", len(lines) * len(FACE_CHANNELS), current().clip_values)
     times: list[float] = []
-    rows: list[np.ndarray] = []
+    rows = np.zeros((len(lines), len(FACE_CHANNELS)))  # one row per line, sized before any line is read
     unknown: dict[str, int] = {}
-    for number, line in enumerate(read_text(source).splitlines(), 1):
+    for number, line in enumerate(lines, 1):
         if not line.strip():
             continue
         where = f"{name} line {number}"
@@ -106,7 +109,7 @@ def read(source: Source) -> Clip:
         time_s = _intensity(state[TIME_KEY], where, TIME_KEY)
         if times and time_s <= times[-1]:
             raise InvalidValueError(f"{where} key {TIME_KEY}", time_s, f"a time after {times[-1]} (increasing)")
-        row = np.zeros(len(FACE_CHANNELS))
+        row = rows[len(times)]
         for key, value in state.items():
             if key in (TIME_KEY, "Speed"):
                 continue
@@ -124,10 +127,9 @@ def read(source: Source) -> Clip:
             else:
                 unknown.setdefault(key, number)
         times.append(time_s)
-        rows.append(row)
     if unknown:
         shown = ", ".join(f"{k} (line {n})" for k, n in unknown.items())
         warnings.warn(f"{name}: skipped unknown keys {shown}", stacklevel=2)
-    if not rows:
+    if not times:
         raise InvalidValueError(name, "no states", "at least one JSON line")
-    return uniform_clip(np.asarray(times), np.stack(rows), FACE_CHANNELS)
+    return uniform_clip(np.asarray(times), rows[: len(times)], FACE_CHANNELS)

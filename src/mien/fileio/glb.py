@@ -7,7 +7,8 @@ One codec for every ``.glb`` mien reads or writes: the reader of users' characte
 ``length | type | data``; the first chunk is ``JSON`` (padded with spaces to 4 bytes), the next, when present,
 ``BIN\\0`` (padded with zeros); chunks of other types are skipped, as the specification asks.
 
-Accessors are read here too (:func:`read_accessor`): strided views, sparse substitution, every component type;
+Accessors are read here too (:func:`read_accessor`): strided views, sparse substitution, every component type,
+a count checked against :mod:`mien.fileio.limits` before anything is allocated;
 the caller hands over the bytes of a buffer view, so compressed views (``EXT_meshopt_compression``) are decoded
 by whoever owns that decoder.
 
@@ -36,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from mien.errors import InvalidValueError
+from mien.fileio.limits import current
 
 __all__ = [
     "COMPONENT_DTYPES",
@@ -201,6 +203,13 @@ def read_accessor(
         raise GlbError(name, f"accessor {index}", f"{component} / {kind}", "a glTF componentType and type",
                        f"accessor {index} has componentType {component} / type {kind}")  # fmt: skip
     dtype, width, count = np.dtype(COMPONENT_DTYPES[component]), TYPE_WIDTHS[kind], int(accessor.get("count", 0))
+    if count < 0:
+        raise GlbError(name, f"accessor {index}", count, "a count >= 0", f"accessor {index} has count {count}")
+    limit = current().accessor_components
+    if count * width > limit:  # before allocating: an accessor without a bufferView is zeros of any count
+        raise GlbError(name, f"accessor {index}", f"{count} x {kind}", f"at most {limit} numbers per accessor",
+                       f"accessor {index} declares {count * width} numbers, over the decode limit {limit} "
+                       "(mien.fileio.limits)")  # fmt: skip
 
     def block(view: Any, offset: int, item_dtype: np.dtype[Any], items: int, n: int) -> np.ndarray:
         if not isinstance(view, int) or not 0 <= view < len(views):
@@ -222,6 +231,9 @@ def read_accessor(
     if sparse:
         indices, patch = sparse.get("indices") or {}, sparse.get("values") or {}
         n = int(sparse.get("count", 0))
+        if not 0 <= n <= count:
+            raise GlbError(name, f"accessor {index}", n, f"a sparse count 0..{count}",
+                           f"accessor {index}: sparse count {n} outside 0..{count}")  # fmt: skip
         index_type = indices.get("componentType")
         if index_type not in (5121, 5123, 5125):
             raise GlbError(name, f"accessor {index}", index_type, "unsigned sparse indices",

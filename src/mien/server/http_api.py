@@ -7,7 +7,6 @@ Every command goes through the same parser as UDP and WebSocket messages
 from __future__ import annotations
 
 import asyncio
-import io
 import secrets
 import time
 from typing import Any
@@ -16,21 +15,27 @@ from urllib.parse import quote
 import orjson
 from fastapi import Depends, FastAPI, HTTPException, Query, Request, Response, WebSocket, status
 from fastapi.responses import FileResponse, JSONResponse, RedirectResponse
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, ConfigDict, Field
 
-from mien.errors import InvalidValueError, MienError, UnknownNameError
-from mien.exchange import reader_for
+from mien.errors import MienError, UnknownNameError
 from mien.exchange.glb import head_glb_bytes
+from mien.server.guard import AccessPolicy, BodyTooLarge, BodyTooSlow, Guard, access_policy, read_body
 from mien.server.head_view import MEDIA_TYPES, referenced_files
 from mien.server.protocol import MessageRejected, frame_bytes, idle_parts, parse_message
 from mien.server.registry import CharacterSpec, Entry
 from mien.server.running import RunningServer
+from mien.server.uploads import BODY_TIMEOUT_S, MAX_CLIP_BYTES, Uploads, UploadsBusy, check_suffix
 from mien.viewer import routes
 
 __all__ = ["create_app"]
 
 _MAX_COMMAND_BYTES = 8192
-_MAX_CLIP_BYTES = 32 * 1024 * 1024
+
+
+class _Body(BaseModel):
+    """A request body: unknown fields and NaN or infinite numbers are refused (422, naming the field)."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
 
 class Health(BaseModel):
@@ -62,7 +67,7 @@ class Health(BaseModel):
     frames_dropped: int = Field(description="Frames replaced before a slow viewer read them")
 
 
-class CharacterCreate(BaseModel):
+class CharacterCreate(_Body):
     """A new character."""
 
     id: str = Field(pattern=r"^[A-Za-z0-9_.\-]{1,64}$", description="Character id")
@@ -110,7 +115,7 @@ class CharacterState(BaseModel):
     weights: dict[str, float] = Field(description="Morph target weights 0..1")
 
 
-class AusCommand(BaseModel):
+class AusCommand(_Body):
     """Full AU state (AUs not named go to 0), as in an OpenFACS datagram."""
 
     aus: dict[str, float] = Field(description='AU -> intensity 0..5, e.g. {"AU12": 3, "AU6L": 1.5}')
@@ -119,14 +124,14 @@ class AusCommand(BaseModel):
     tau_s: dict[str, float] | None = Field(None, description="Per-AU time constant, seconds")
 
 
-class EmotionCommand(BaseModel):
+class EmotionCommand(_Body):
     """An emotion or blend event."""
 
     emotion: str = Field(description="joy, sadness, anger, surprise, disgust, fear, a blend or an alias")
     intensity: float = Field(1.0, description="0..5; 1 = the prototype")
 
 
-class PadCommand(BaseModel):
+class PadCommand(_Body):
     """A PAD (pleasure, arousal, dominance) state, each -1..1."""
 
     pleasure: float
@@ -134,14 +139,14 @@ class PadCommand(BaseModel):
     dominance: float
 
 
-class LaughterCommand(BaseModel):
+class LaughterCommand(_Body):
     """A laugh or smile."""
 
     type: str = Field(description="One of the 13 laugh and smile types, e.g. laughter")
     intensity: float = Field(1.0, description="0..5")
 
 
-class IdleCommand(BaseModel):
+class IdleCommand(_Body):
     """Idle behaviour switches; ``on`` sets every part, the named parts override it; parts not given keep their
     state."""
 
@@ -170,7 +175,14 @@ class ErrorBody(BaseModel):
 _ERRORS: dict[int | str, dict[str, Any]] = {
     400: {"model": ErrorBody, "description": "Bad input (names the value)"},
     401: {"model": ErrorBody, "description": "Missing or wrong access token"},
+    403: {"model": ErrorBody, "description": "Host or Origin not allowed (see docs/SERVER.md, Security)"},
     404: {"model": ErrorBody, "description": "No such character"},
+    408: {"model": ErrorBody, "description": "The body did not arrive in time"},
+    413: {"model": ErrorBody, "description": "The body is over its size limit"},
+    415: {"model": ErrorBody, "description": "Wrong Content-Type (application/json; a clip: application/octet-stream)"},
+}
+_UPLOAD_ERRORS: dict[int | str, dict[str, Any]] = {
+    503: {"model": ErrorBody, "description": "Too many uploads being read; retry (Retry-After)"},
 }
 
 
@@ -205,8 +217,11 @@ def _info(entry: Entry) -> CharacterInfo:
     )
 
 
-def create_app(server: RunningServer) -> FastAPI:
+def create_app(server: RunningServer, access: AccessPolicy | None = None) -> FastAPI:
     """The FastAPI app of ``server``, with the browser viewer (:func:`mien.viewer.routes.mount`).
+
+    Every request passes :class:`mien.server.guard.Guard` first: ``Host`` and ``Origin`` checked against
+    ``access`` (default: a loopback server's, no other origin), content types, body size and time limits.
 
     The handlers that read or change the characters are ``async``: they run on the event loop, between ticks,
     never in a worker thread beside the clock. Loading a new character's head runs in a thread.
@@ -220,6 +235,16 @@ def create_app(server: RunningServer) -> FastAPI:
         "The WebSocket stream is at /ws?character=ID (binary frames, see docs/SERVER.md).",
     )
     registry = server.registry
+    policy = access if access is not None else access_policy("127.0.0.1")
+    if policy.origins:  # pages of an allowed origin may call the API (their preflight requests get an answer)
+        from starlette.middleware.cors import CORSMiddleware
+
+        app.add_middleware(
+            CORSMiddleware, allow_origins=sorted(policy.origins), allow_methods=["*"],
+            allow_headers=["authorization", "content-type"],
+        )  # fmt: skip
+    app.add_middleware(Guard, policy=policy)  # outermost: before CORS and every route
+    uploads = Uploads()
 
     def check_token(request: Request) -> None:
         if server.token is None:
@@ -352,20 +377,31 @@ def create_app(server: RunningServer) -> FastAPI:
         return queue(character_id, {"idle": switches})
 
     @app.post("/api/characters/{character_id}/clip", response_model=Accepted, status_code=202, dependencies=api,
-              responses=_ERRORS, openapi_extra={"requestBody": {"required": True, "content": {
+              responses={**_ERRORS, **_UPLOAD_ERRORS}, openapi_extra={"requestBody": {"required": True, "content": {
                   "application/octet-stream": {"schema": {"type": "string", "format": "binary"}}}}})  # fmt: skip
     async def send_clip(
         character_id: str, request: Request, suffix: str = Query(description="File suffix, e.g. .json or .npz")
     ) -> Accepted:
-        """Play a clip file (its bytes as the body; ``suffix`` picks the reader) on the character now."""
-        entry = entry_of(character_id)
-        declared = request.headers.get("content-length", "0")
-        if declared.isdigit() and int(declared) > _MAX_CLIP_BYTES:
-            raise HTTPException(413, f"clip of {declared} bytes is over {_MAX_CLIP_BYTES}")
-        data = await request.body()
-        if len(data) > _MAX_CLIP_BYTES:
-            raise HTTPException(413, f"clip of {len(data)} bytes is over {_MAX_CLIP_BYTES}")
-        entry.clips.append(_read_clip(data, suffix))
+        """Play a clip file (its bytes as the body, ``Content-Type: application/octet-stream``; ``suffix`` picks
+        the reader) on the character now. The file is read in a worker process with size and time limits
+        (``mien.server.uploads``): the clock never waits for it."""
+        entry_of(character_id)
+        check_suffix(suffix)
+        declared = request.headers.get("content-length", "")
+        try:
+            with uploads.slot():
+                data = await read_body(
+                    request.receive, MAX_CLIP_BYTES, BODY_TIMEOUT_S, int(declared) if declared.isdigit() else None
+                )
+                clip = await uploads.read(data, suffix)
+        except UploadsBusy as exc:
+            raise HTTPException(503, str(exc), headers={"Retry-After": "1"}) from None
+        except BodyTooLarge as exc:
+            raise HTTPException(413, f"clip: {exc}", headers={"Connection": "close"}) from None
+        except BodyTooSlow as exc:
+            raise HTTPException(408, f"clip: {exc}", headers={"Connection": "close"}) from None
+        entry = entry_of(character_id)  # it may have gone while the file was read
+        entry.clips.append(clip)
         registry.counters.http_commands += 1
         return Accepted(character=entry.spec.id)
 
@@ -411,23 +447,3 @@ def create_app(server: RunningServer) -> FastAPI:
 
     routes.mount(app)
     return app
-
-
-def _read_clip(data: bytes, suffix: str) -> Any:
-    """The uploaded clip file's bytes read in memory by the reader of ``suffix`` (readers take a binary stream)."""
-    if not suffix.startswith(".") or "/" in suffix or len(suffix) > 16:
-        raise InvalidValueError("suffix", suffix, "a file suffix such as .json or .npz")
-    try:
-        reader = reader_for(f"clip{suffix}")
-    except MienError:
-        raise
-    except ImportError as exc:
-        raise InvalidValueError("suffix", suffix, f"a clip format this install can read ({exc})") from None
-    stream = io.BytesIO(data)
-    stream.name = f"uploaded clip{suffix}"
-    try:
-        return reader(stream)
-    except MienError:
-        raise
-    except Exception as exc:  # a reader's own parse error on garbage bytes
-        raise InvalidValueError("clip", f"{len(data)} bytes", f"a readable {suffix} clip ({exc})") from None

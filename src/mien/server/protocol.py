@@ -221,7 +221,8 @@ def _number(key: str, value: Any, low: float, high: float) -> float:
     if type(value) is int or type(value) is float:
         number = float(value)
     else:
-        raise MessageRejected(Rejection.WRONG_TYPE, f"{key}={value!r} is not a number")
+        shown = "null" if value is None else repr(value)  # a null is refused by name, never read as "not given"
+        raise MessageRejected(Rejection.WRONG_TYPE, f"{key}={shown} is not a number"[:200])
     if not (low <= number <= high):  # also false for NaN
         raise MessageRejected(Rejection.OUT_OF_RANGE, f"{key}={value!r} is outside {low:g}..{high:g}")
     return number
@@ -240,7 +241,8 @@ def _au_map(key: str, value: Any, low: float, high: float) -> tuple[tuple[str, f
 
 def _name(key: str, value: Any) -> str:
     if not isinstance(value, str):
-        raise MessageRejected(Rejection.WRONG_TYPE, f"{key}={value!r} is not a string"[:200])
+        shown = "null" if value is None else repr(value)
+        raise MessageRejected(Rejection.WRONG_TYPE, f"{key}={shown} is not a string"[:200])
     return value
 
 
@@ -341,10 +343,10 @@ def parse_message(data: bytes | str, max_bytes: int = MAX_MESSAGE_BYTES) -> Mess
         raise MessageRejected(Rejection.MALFORMED_JSON, str(exc)[:200]) from None
     if not isinstance(obj, dict):
         raise MessageRejected(Rejection.NOT_OBJECT, f"expected a JSON object, got {type(obj).__name__}")
-    if obj.keys() <= _OPENFACS_FAST_KEYS and b"true" not in data and b"false" not in data:
+    if obj.keys() <= _OPENFACS_FAST_KEYS and b"true" not in data and b"false" not in data and b"null" not in data:
         # the common OpenFACS message (with a character id when many faces are driven), checked in bulk: min/max
-        # raise TypeError on strings, null, lists and objects; booleans were ruled out on the raw bytes (AU keys
-        # never contain those words; an id that does takes the full path)
+        # raise TypeError on strings, lists and objects; booleans and null were ruled out on the raw bytes (AU
+        # keys never contain those words; an id that does takes the full path, which refuses "Speed": null)
         speed = obj.pop("Speed", None)
         character = obj.pop("character", None)
         values = obj.values()
