@@ -20,7 +20,9 @@ Gaze is not animated (the eyes are part of the one mesh; ARKit eye-look targets 
 whole mesh turns with the head, also vertices outside the rig's ``head`` region.
 
 The reader returns the animation as a weight clip: one channel per target name (weights 0..1) and the head
-pose channels when the file rotates a node, resampled to a uniform frame rate estimated from the key times.
+pose channels when the file rotates a node, resampled to a uniform frame rate estimated from the key times. A
+user's character file that mien animated (:mod:`mien.exchange.glb_user`) gives back the head's target weights
+(ARKit names, and the file's other shapes under their own names) rather than its own shapes' weights.
 :func:`mien.rig.face_weights.weights_to_au` turns ARKit weights into AU intensities.
 """
 
@@ -34,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from mien.errors import InvalidValueError
-from mien.exchange.glb_user import carries_file
+from mien.exchange.glb_user import carries_file, head_turns, target_clip
 from mien.exchange.glb_user import write as write_user_file
 from mien.exchange.quaternions import matrix_quaternions
 from mien.exchange.timing import uniform_clip
@@ -382,6 +384,7 @@ def read(source: Source) -> Clip:
     if not animations:
         raise InvalidValueError(f"{name} animations", 0, "an animation (this file holds a still head)")
     animation = animations[0]
+    extras = animation.get("extras")
     mesh_nodes = {i for i, node in enumerate(nodes) if node.get("mesh") == mesh_index}
     tracks: dict[str, tuple[np.ndarray, np.ndarray]] = {}
     for channel in animation.get("channels", []):
@@ -393,8 +396,12 @@ def read(source: Source) -> Clip:
             output = output.reshape(len(times), 3, -1)[:, 1].reshape(-1, output.shape[1])
         if path == "weights" and channel["target"].get("node") in mesh_nodes and "weights" not in tracks:
             tracks["weights"] = (times, output.reshape(len(times), n_targets))
-        elif path == "rotation" and "rotation" not in tracks:
-            tracks["rotation"] = (times, _angles(output))
+        elif path == "rotation":
+            turns = head_turns(channel["target"].get("node"), output, extras)
+            if turns is not None:  # the head of a user's file that mien animated: its own rest frame undone
+                tracks["rotation"] = (times, _angles(matrix_quaternions(turns)))
+            elif "rotation" not in tracks:
+                tracks["rotation"] = (times, _angles(output))
     if "weights" not in tracks:
         raise InvalidValueError(f"{name} animation 0", "no morph-weight channel", "an animation of the morph weights")
     times, weights = tracks["weights"]
@@ -407,4 +414,6 @@ def read(source: Source) -> Clip:
         rotation_times, angles = tracks["rotation"]
         columns += [np.interp(times, rotation_times, angles[:, j]) for j in range(3)]
         channel_names += list(POSE_CHANNELS[:3])
-    return uniform_clip(times, np.stack(columns, axis=1), channel_names)
+    clip = uniform_clip(times, np.stack(columns, axis=1), channel_names)
+    targets = target_clip(clip, extras)
+    return clip if targets is None else targets

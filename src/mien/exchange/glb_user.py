@@ -8,6 +8,11 @@ clip's frames:
   weights :mod:`mien.exchange.file_shapes` gives from the rig's (ARKit) weights, so same-named shapes on several
   meshes (a head and its teeth) move together; a VRM expression (``happy``) drives the morph targets it binds, at
   their bind weights; shapes the clip does not move keep the file's default weights;
+- in the animation's ``extras.mien.targets``, the rows that made each shape weight (rig target -> ``[shape,
+  weight, side]`` rows, :mod:`mien.exchange.file_shapes`), so :func:`target_clip` (used by the ``.glb`` reader)
+  gives the rig's target weights back (ARKit names, with the file's unmatched shapes under their own names),
+  and, with a head turn, ``extras.mien.head``: the head node and the rest rotations around the turn (``local =
+  left @ turn @ right``), so :func:`head_turns` reads mien's yaw, pitch and roll back, not the bone's;
 - with head pose channels in the clip, the rotation of the head bone or node (the VRM humanoid ``head``, else a
   node named ``Head``), and with gaze channels, of the eye bones or nodes (``leftEye`` / ``rightEye``, else nodes
   named ``LeftEye``...), each turned in mien's frame (:mod:`mien.rig.pose` signs) about its own origin, the eyes
@@ -33,7 +38,7 @@ from typing import Any
 import numpy as np
 
 from mien.errors import InvalidValueError
-from mien.exchange.file_shapes import rig_shape_weights
+from mien.exchange.file_shapes import SourceRows, rig_shape_weights, shape_weights, source_rows
 from mien.exchange.quaternions import matrix_quaternions
 from mien.facs.catalogue import POSE_CHANNELS
 from mien.facs.clip import Clip
@@ -43,7 +48,15 @@ from mien.rig.face_weights import clip_to_rig
 from mien.rig.model import Rig
 from mien.rig.pose import _rotations
 
-__all__ = ["ANIMATION_NAME", "FILE_FORMATS", "carries_file", "user_file_bytes", "write"]
+__all__ = [
+    "ANIMATION_NAME",
+    "FILE_FORMATS",
+    "carries_file",
+    "head_turns",
+    "target_clip",
+    "user_file_bytes",
+    "write",
+]
 
 FILE_FORMATS: tuple[str, ...] = ("gltf", "vrm0", "vrm1")
 """``HeadFileInfo.format`` values of heads read from a glTF file (an OBJ folder has no file to carry)."""
@@ -108,6 +121,7 @@ def user_file_bytes(clip: Clip, rig: Rig) -> bytes:
 
     flip = np.diag([-1.0, 1.0, -1.0]) if str(info.axes).startswith("turned") else np.eye(3)
     head_node, eye_nodes = _pose_nodes(document)
+    head: dict[str, Any] | None = None
     has_head = any(c in clip.channels for c in POSE_CHANNELS[:3])
     has_gaze = any(c in clip.channels for c in POSE_CHANNELS[3:])
 
@@ -119,6 +133,8 @@ def user_file_bytes(clip: Clip, rig: Rig) -> bytes:
         else:
             turn = flip @ _rotations(poses[:, 0], poses[:, 1], poses[:, 2]) @ flip
             channel(head_node, "rotation", _turned_locals(document, head_node, turn), "VEC4")
+            parent, rest = _rest_frames(document, head_node)
+            head = {"node": head_node, "left": (parent.T @ flip).tolist(), "right": (flip @ parent @ rest).tolist()}
     if has_gaze:
         if not eye_nodes:
             warnings.warn(f"{source.name}: no eye bones or nodes: the gaze is not animated", stacklevel=3)
@@ -126,12 +142,62 @@ def user_file_bytes(clip: Clip, rig: Rig) -> bytes:
         for eye in eye_nodes:
             channel(eye, "rotation", _turned_locals(document, eye, gaze), "VEC4")
     if channels:
-        animation = {"name": ANIMATION_NAME, "samplers": samplers, "channels": channels}
+        rows = {target: [list(row) for row in shape_rows] for target, shape_rows in source_rows(rig).items()}
+        extras: dict[str, Any] = {"mien": {"targets": rows, **({"head": head} if head else {})}}
+        animation = {"name": ANIMATION_NAME, "samplers": samplers, "channels": channels, "extras": extras}
         document.setdefault("animations", []).append(animation)
     asset = document.setdefault("asset", {"version": "2.0"})
     generator = asset.get("generator")
     asset["generator"] = f"{generator}; animated by mien" if generator else "mien"
     return pack_glb(document, appender.binary())
+
+
+def target_clip(shapes: Clip, extras: Any) -> Clip | None:
+    """The rig's target weights (0..1) of a clip of file ``shapes`` weights (pose channels kept) that
+    :func:`user_file_bytes` wrote, from the rows it left in the animation's ``extras``; None without them.
+
+    The shape weights are linear in the target weights (:func:`~mien.exchange.file_shapes.shape_weights`), so
+    the targets are their least-squares solution (the smallest one where targets share a shape), over the
+    shapes ``shapes`` holds (a file's shapes on other meshes, such as the teeth, are not needed). Targets with
+    no shape in ``shapes`` are left out.
+    """
+    table = extras.get("mien", {}).get("targets") if isinstance(extras, dict) else None
+    if not isinstance(table, dict) or not table:
+        return None
+    try:
+        rows: SourceRows = {str(t): tuple((str(s), float(w), str(side)) for s, w, side in r) for t, r in table.items()}
+    except (TypeError, ValueError):
+        return None
+    targets = tuple(rows)
+    unit = shape_weights(np.eye(len(targets), dtype=np.float32), targets, rows)  # shape -> its column of M
+    present = [name for name in shapes.channels if name in unit]
+    if not present:
+        return None
+    matrix = np.stack([unit[name] for name in present]).astype(np.float64)  # (shapes, targets)
+    used = np.flatnonzero(np.abs(matrix).sum(axis=0) > 0)
+    values = np.stack([shapes.channel(name) for name in present], axis=1)
+    solved = values @ np.linalg.pinv(matrix[:, used]).T
+    poses = [name for name in shapes.channels if name in POSE_CHANNELS]
+    columns = [np.clip(solved, 0.0, 1.0), *(shapes.channel(name)[:, None] for name in poses)]
+    return Clip(np.hstack(columns), shapes.fps, (*(targets[j] for j in used), *poses))
+
+
+def head_turns(node: int, quaternions: np.ndarray, extras: Any) -> np.ndarray | None:
+    """(n, 3, 3) head turns in mien's frame (:mod:`mien.rig.pose`) of node ``node``'s animated (n, 4) local
+    rotations (x, y, z, w), when :func:`user_file_bytes` wrote them for the head and left its rest frames in the
+    animation's ``extras``; None otherwise."""
+    head = extras.get("mien", {}).get("head") if isinstance(extras, dict) else None
+    if not isinstance(head, dict) or head.get("node") != node:
+        return None
+    try:
+        left, right = np.asarray(head["left"], np.float64), np.asarray(head["right"], np.float64)
+    except (KeyError, TypeError, ValueError):
+        return None
+    if left.shape != (3, 3) or right.shape != (3, 3):
+        return None
+    local = np.stack([_quaternion_matrix(q) for q in np.asarray(quaternions, np.float64)])
+    turns: np.ndarray = left.T @ local @ right.T  # both are rotations: their transposes undo them
+    return turns
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -398,6 +464,13 @@ def _turned_locals(document: dict[str, Any], index: int, turns: np.ndarray) -> n
     ``P^-1 T P L`` turns the node's world frame by ``T``. A node given by a matrix is rewritten as TRS (a node
     whose rotation is animated may not have a matrix).
     """
+    parent, rest = _rest_frames(document, index)
+    return matrix_quaternions(parent.T @ turns @ parent @ rest)
+
+
+def _rest_frames(document: dict[str, Any], index: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(P, L)``: node ``index``'s parent's rest world rotation and its own rest rotation, (3, 3) each. A node
+    given by a matrix is rewritten as TRS (a node whose rotation is animated may not have a matrix)."""
     nodes = document["nodes"]
     parent_of = {child: i for i, node in enumerate(nodes) for child in node.get("children") or []}
     world = np.eye(4)
@@ -413,6 +486,4 @@ def _turned_locals(document: dict[str, Any], index: int, turns: np.ndarray) -> n
         node["rotation"] = [float(v) for v in matrix_quaternions(rest[None])[0]]
         node["scale"] = [float(v) for v in np.diag(rest.T @ m[:3, :3])]
     rest = _quaternion_matrix(node.get("rotation", [0.0, 0.0, 0.0, 1.0]))
-    parent = _rotation_part(world[:3, :3])
-    local = parent.T @ turns @ parent @ rest
-    return matrix_quaternions(local)
+    return _rotation_part(world[:3, :3]), rest

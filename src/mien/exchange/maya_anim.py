@@ -173,6 +173,20 @@ def maya_rate(fps: float) -> float:
     return float(next((r for r in named if r > rate), named[-1]))
 
 
+def _maya_names(table: dict[str, tuple[np.ndarray, np.ndarray]]) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """``table`` with the dots of its names turned into ``_`` (Maya attribute names have none; see :func:`write`)."""
+    renamed = {name: name.replace(".", "_") if _NAME.match(name.replace(".", "_")) else name for name in table}
+    changed = [f"{old} -> {new}" for old, new in renamed.items() if old != new]
+    if not changed:
+        return table
+    clash = next((old for old, new in renamed.items() if list(renamed.values()).count(new) > 1), None)
+    if clash is not None:
+        raise InvalidValueError("channel", clash, f"a name that stays unique as a Maya name ({renamed[clash]})")
+    shown = ", ".join(changed[:3]) + (f" and {len(changed) - 3} more" if len(changed) > 3 else "")
+    warnings.warn(f"Maya attribute names hold letters, digits and _ only: renamed {shown}", stacklevel=3)
+    return {renamed[name]: curve for name, curve in table.items()}
+
+
 def _number(value: float) -> str:
     """Shortest text that reads back as exactly ``value`` (``1`` rather than ``1.0``)."""
     value = float(value)
@@ -257,10 +271,12 @@ def write(
     naming the curve and key. ``node``: the Maya node the attributes belong to (``controller_script`` makes it).
     ``reduce``: keep only the keys needed so that linear interpolation reproduces every sample within
     ``tolerance`` (absolute; None: 0.5 % of each curve's value range); otherwise every sample is a key. Channel
-    names must be Maya attribute names (letters, digits, ``_``).
+    names must be Maya attribute names (letters, digits, ``_``); a ``.`` (a character file's
+    ``h_expressions.Kiss_h``) turns into ``_`` with a warning, unless two names would then collide.
     """
     refuse_rig(rig, ".anim")
     table, rate, note = _curves(curves, fps)
+    table = _maya_names(table)
     time_unit = fps_to_time_unit(rate)
     if not _NAME.match(node):
         raise InvalidValueError("node", node, "a Maya node name (letters, digits, _)")
