@@ -14,6 +14,7 @@ from urllib.parse import quote
 
 import orjson
 from fastapi import Depends, FastAPI, HTTPException, Query, Request, Response, WebSocket, status
+from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse, JSONResponse, RedirectResponse
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -253,6 +254,13 @@ def create_app(server: RunningServer, access: AccessPolicy | None = None) -> Fas
         given = header[7:] if header.lower().startswith("bearer ") else request.query_params.get("token", "")
         if not secrets.compare_digest(given.encode(), server.token.encode()):
             raise HTTPException(status.HTTP_401_UNAUTHORIZED, "missing or wrong access token (Bearer or ?token=)")
+
+    @app.exception_handler(RequestValidationError)
+    async def _invalid_body(request: Request, exc: RequestValidationError) -> JSONResponse:
+        # FastAPI's own answer echoes the input, and a NaN in it cannot be written as JSON (a 500): name the field,
+        # say what is wrong, leave the value out
+        detail = [{"loc": list(error["loc"]), "msg": error["msg"], "type": error["type"]} for error in exc.errors()]
+        return JSONResponse({"detail": detail}, status_code=422)
 
     @app.exception_handler(MienError)
     async def _mien_error(request: Request, exc: MienError) -> JSONResponse:

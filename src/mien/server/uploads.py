@@ -105,7 +105,7 @@ def parse_clip(data: bytes, suffix: str) -> Clip:
     except MienError:
         raise
     except MemoryError:
-        raise InvalidValueError("clip", f"{len(data)} bytes", "a clip that fits the upload's memory") from None
+        raise  # the worker says how much memory it had
     except Exception as exc:  # a reader's own parse error on garbage bytes
         raise InvalidValueError("clip", f"{len(data)} bytes", f"a readable {suffix} clip ({exc})") from None
     if not isinstance(clip, Clip):
