@@ -35,6 +35,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("--token", help="access token (default: none on loopback, generated beyond)")
     parser.add_argument(
+        "--allow-origin",
+        action="append",
+        default=[],
+        metavar="ORIGIN",
+        help="a web origin (http://localhost:3000) whose pages may use the server besides its own viewer "
+        "(repeatable; others get 403, see docs/SERVER.md, Security)",
+    )
+    parser.add_argument(
         "--character",
         action="append",
         metavar="ID",
@@ -83,6 +91,7 @@ def run(args: argparse.Namespace) -> int:
         for i, character_id in enumerate(ids)
     )
     config = ServeConfig(args.host, args.udp_port, args.http_port, args.tick_hz, args.token, specs)
+    config = dataclasses.replace(config, allow_origins=tuple(args.allow_origin))
     if args.max_viewers is not None:
         config = dataclasses.replace(config, max_viewers=args.max_viewers)
     logging.basicConfig(level=logging.WARNING, format="%(asctime)s %(name)s %(levelname)s: %(message)s")

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import ipaddress
 import logging
 import secrets
 import socket
@@ -21,6 +20,7 @@ from typing import Any
 
 from mien.errors import InvalidValueError
 from mien.extras import require
+from mien.server.guard import access_policy, is_loopback, origin_of
 from mien.server.registry import CharacterSpec, Registry
 from mien.server.scheduler import Clock
 from mien.server.stats import os_dropped_datagrams
@@ -30,20 +30,6 @@ from mien.server.websocket import DEFAULT_MAX_VIEWERS, Hub
 __all__ = ["LiveServer", "ServeConfig", "ServerThread", "is_loopback", "serve"]
 
 log = logging.getLogger("mien.server")
-
-
-def is_loopback(host: str) -> bool:
-    """True for ``localhost`` and loopback addresses (127.0.0.0/8, ::1).
-
-    >>> is_loopback("127.0.0.1"), is_loopback("0.0.0.0")
-    (True, False)
-    """
-    if host == "localhost":
-        return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False
 
 
 @dataclass(frozen=True)
@@ -62,6 +48,9 @@ class ServeConfig:
     """Access token; None = none on loopback, a generated one beyond."""
     characters: tuple[CharacterSpec, ...] = (CharacterSpec("default"),)
     """Characters at start (the first is the default target of messages)."""
+    allow_origins: tuple[str, ...] = ()
+    """Web origins besides the server's own whose pages may use it (``http://localhost:3000``); see
+    :mod:`mien.server.guard`."""
     max_viewers: int = DEFAULT_MAX_VIEWERS
     """WebSocket viewers served at once; more are refused (close code 1013) and counted."""
 
@@ -72,6 +61,8 @@ class ServeConfig:
                 raise InvalidValueError(name, port, "a port 0..65535 (0 = any free port)")
         if self.token is not None and len(self.token) < 8:
             raise InvalidValueError("token", "***", "a token of at least 8 characters")
+        for origin in self.allow_origins:
+            origin_of(origin)  # raises naming a malformed one
         ids = [spec.id for spec in self.characters]
         if len(set(ids)) != len(ids):
             raise InvalidValueError("characters", ids, "distinct character ids")
@@ -127,7 +118,7 @@ class LiveServer:
             self._udp.close()
             raise
         self.http_port = int(sock.getsockname()[1])
-        app = create_app(self)
+        app = create_app(self, access_policy(host, self.config.allow_origins))
         config = uvicorn.Config(
             app, log_level="warning", lifespan="off", ws="websockets-sansio", access_log=False, ws_max_size=65536
         )
