@@ -7,7 +7,9 @@ tests with zero errors and zero warnings):
   face, +x the character's left), smooth ``NORMAL``, ``COLOR_0`` (linear RGB albedo of
   :func:`mien.render.appearance.rig_vertex_colors`) and, where the head gets face paint (brows, lash lines,
   lips; :mod:`mien.render.face_paint`), ``TEXCOORD_0`` and a PNG ``baseColorTexture`` that multiplies the
-  vertex colour; triangles the renderer hides (see-through helper meshes) are left out of the indices;
+  vertex colour, and ``_PAINT`` (an application attribute: each vertex's own paint texcoords and strength, which
+  mien's viewer uses to fade the paint as the renderer does); triangles the renderer hides (see-through helper
+  meshes) are left out of the indices;
 - every rig target as a morph target (``POSITION`` deltas, metres), as a *sparse* accessor when the target moves
   few enough vertices that the sparse form is smaller; the target names in ``mesh.extras.targetNames``
   (the convention three.js and Blender read);
@@ -249,6 +251,12 @@ def document_of(
         gltf["samplers"] = [{"magFilter": 9729, "minFilter": 9987, "wrapS": 33071, "wrapT": 33071}]
         gltf["textures"] = [{"sampler": 0, "source": 0}]
         material["pbrMetallicRoughness"]["baseColorTexture"] = {"index": 0}
+        # Every vertex's own texcoords and paint strength (FacePaint.texcoords: u, v, strength), for mien's viewer,
+        # which fades the paint by the strength as the renderer does. TEXCOORD_0 parks unpainted vertices on the
+        # border, so a triangle from a painted vertex to a parked one spans the texture and samples its coarsest
+        # mipmap: thin red lines along the paint's edge (ICT's neck and chest) in a viewer that reads only it.
+        paint_texcoords = np.asarray(face_paint(rig).texcoords, np.float32)  # type: ignore[union-attr]  # uv: painted
+        attributes["_PAINT"] = built.accessor(paint_texcoords, "VEC3", target=_ARRAY_BUFFER)
     primitive: dict[str, Any] = {
         "attributes": attributes,
         "indices": built.accessor(faces.reshape(-1), "SCALAR", _UINT32, target=_ELEMENT_ARRAY_BUFFER),

@@ -301,6 +301,36 @@ function poseNodes(gltf) {
 }
 
 /**
+ * mien's glb gives each vertex its own paint texcoords and strength (attribute _PAINT: u, v, strength, as
+ * mien.render.face_paint makes them): draw the paint texture with them, faded by the strength, as mien's
+ * renderer does. Its TEXCOORD_0, for other glTF viewers, parks unpainted vertices on the texture's border, so
+ * a triangle from a painted vertex to a parked one spans the whole texture and samples its coarsest mipmap:
+ * thin red lines along the paint's edge (ICT's neck and chest).
+ */
+function paintLikeTheRenderer(object) {
+  if (!object.isMesh || !object.geometry.attributes._paint || !object.material.map) return;
+  const material = object.material;
+  material.onBeforeCompile = (shader) => {
+    shader.vertexShader = shader.vertexShader
+      .replace("#include <common>", "#include <common>\nattribute vec3 _paint;\nvarying vec3 vMienPaint;")
+      .replace("#include <uv_vertex>", "#include <uv_vertex>\n\tvMienPaint = _paint;");
+    shader.fragmentShader = shader.fragmentShader
+      .replace("#include <common>", "#include <common>\nvarying vec3 vMienPaint;")
+      .replace(
+        "#include <map_fragment>",
+        [
+          "#ifdef USE_MAP",
+          "\tvec4 mienPaint = texture2D( map, vMienPaint.xy );",
+          "\tdiffuseColor.rgb *= mix( vec3( 1.0 ), mienPaint.rgb, clamp( vMienPaint.z, 0.0, 1.0 ) );",
+          "#endif",
+        ].join("\n"),
+      );
+  };
+  material.customProgramCacheKey = () => "mien-paint";
+  material.needsUpdate = true;
+}
+
+/**
  * Wrap the glTF scene for posing, place a head file in mien's frame (file_to_rig), and map every morph mesh's
  * targets onto the frame's weight order by name (the character's target_names; a server that gives none: the
  * largest morph mesh's names).
@@ -323,6 +353,7 @@ function prepareHead(gltf, info) {
     mesh,
     map: Int32Array.from(namesOf(mesh), (n) => (order.has(n) ? order.get(n) : -1)),
   }));
+  root.traverse(paintLikeTheRenderer);
   // A head file sits in its own frame (a full body's head 1.6 m up, centimetres...): file_to_rig puts it in
   // mien's (metres, origin between the eyes), where the camera presets look.
   const placed = new THREE.Group();
