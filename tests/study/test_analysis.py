@@ -12,6 +12,7 @@ from scipy import stats
 
 from mien.errors import InvalidValueError, UnknownNameError
 from mien.study.analysis import ANSWER_COLUMNS, analyze, analyze_csv, mean_ci, trials_frame
+from mien.study.export import answers_sha256
 from mien.study.quality import paper_table4
 
 DATA = Path(__file__).parent / "data"
@@ -221,4 +222,5 @@ def test_frame_from_store_with_numbers_and_nones() -> None:
         from_frame = analyze(answers)
     from_csv = analyze_csv(DATA / "broekens_small.csv")
     pd.testing.assert_frame_equal(from_frame.quality, from_csv.quality)
-    assert from_frame.factor_levels["distance_m"] == ("1",) and from_frame.source_sha256 == ""
+    assert from_frame.factor_levels["distance_m"] == ("1",)
+    assert from_frame.source_sha256 == answers_sha256(answers)  # what was read, hashed (was empty)

@@ -68,11 +68,11 @@ def test_late_failure_keeps_finished_videos(tmp_path: Path, monkeypatch: pytest.
     real = stimuli_module._render
     calls = []
 
-    def failing(design, spec, scenes, video):  # type: ignore[no-untyped-def]
+    def failing(design, spec, scenes, video, *head):  # type: ignore[no-untyped-def]
         calls.append(spec.id)
         if spec.id == "s003":
             raise RuntimeError("disk full")
-        return real(design, spec, scenes, video)
+        return real(design, spec, scenes, video, *head)
 
     monkeypatch.setattr(stimuli_module, "_render", failing)
     with pytest.raises(RuntimeError, match="disk full"):

@@ -10,7 +10,7 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from mien.commands._checks import input_file, output_file, output_folder, output_target
+from mien.commands._checks import input_file, output_file, output_folder, output_target, positive_seconds
 from mien.commands._vocabulary import add_deprecated_alias, add_emotion_model, add_landmarker, add_output, add_quiet
 
 if TYPE_CHECKING:
@@ -46,6 +46,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
             "--db",
             help="database: a SQLite file or URL, or postgresql://USER@HOST:PORT/DB "
             "(default: STUDY_NAME.sqlite next to the design)",
+        )
+        sub.add_argument(
+            "--busy-timeout",
+            type=positive_seconds,
+            default=None,
+            metavar="SECONDS",
+            help="longest wait for a locked or unreachable database per request, retries included; then the "
+            "request is refused (HTTP 503 with Retry-After while serving) (default 3)",
         )
 
     stimuli = with_design(
@@ -105,9 +113,17 @@ def _stimuli_folder(args: argparse.Namespace, design: Design) -> Path:
 
 
 def _store(args: argparse.Namespace, design: Design) -> Store:
-    from mien.study.storage import Store, database_url
+    from mien.errors import InvalidValueError
+    from mien.study.design import check_study_name
+    from mien.study.storage import BUSY_TIMEOUT_S, Store, database_url
 
-    return Store(database_url(args.db, design.path.parent / f"{design.name}.sqlite"))
+    check_study_name(design.name, f"{design.path}: study.name")  # it names the default database file
+    default = design.path.parent / f"{design.name}.sqlite"
+    if default.resolve().parent != design.path.parent.resolve():
+        raise InvalidValueError(f"{design.path}: study.name", design.name, "a name without path characters")
+    if args.busy_timeout is not None and not args.busy_timeout <= 3600:
+        raise InvalidValueError("--busy-timeout", args.busy_timeout, "seconds in (0, 3600]")
+    return Store(database_url(args.db, default), busy_timeout_s=args.busy_timeout or BUSY_TIMEOUT_S)
 
 
 def run_stimuli(args: argparse.Namespace) -> int:
@@ -125,7 +141,7 @@ def run_stimuli(args: argparse.Namespace) -> int:
 
 def _checked_manifest(design: Design, folder: Path) -> dict:
     from mien.errors import InvalidValueError
-    from mien.study.stimuli import load_manifest
+    from mien.study.stimuli import check_design_sha256, load_manifest
 
     manifest = load_manifest(folder)
     ids = [entry["id"] for entry in manifest["stimuli"]]
@@ -136,6 +152,7 @@ def _checked_manifest(design: Design, folder: Path) -> dict:
             f"the manifest of study {design.name!r} with its {len(design.stimuli)} stimuli: re-run "
             f"`mien study stimuli {design.path}`",
         )
+    check_design_sha256(manifest, design, folder)
     return manifest
 
 
@@ -183,6 +200,7 @@ def run_analyze(args: argparse.Namespace) -> int:
             raise InvalidValueError(
                 "answers", 0, f"at least one stored answer of study {design.name!r} (run `mien study serve` first)"
             )
+        # hashed as read: the same SHA-256 as `mien study export` of these answers would have
         result = analyze(frame, factors, source=str(args.db or design.name))
     path = write_report(
         result,

@@ -35,6 +35,7 @@ from mien.errors import InvalidValueError, UnknownNameError
 from mien.extras import require
 from mien.fileio.hashing import file_sha256
 from mien.study.anova import AnovaTable, rm_anova
+from mien.study.export import answers_sha256
 from mien.study.protocol import BROEKENS_LABELS
 from mien.study.quality import LABEL_PREFIX, label_intensity, label_question, quality_table
 
@@ -118,7 +119,8 @@ class StudyAnalysis:
     source: str = ""
     """Where the answers came from (a CSV path, or ``"answers frame"``)."""
     source_sha256: str = ""
-    """SHA-256 of the CSV file analysed (empty for an in-memory frame)."""
+    """SHA-256 of the CSV file analysed, or of an in-memory frame's canonical CSV bytes
+    (:func:`mien.study.export.answers_sha256`: what ``mien study export`` would write from it)."""
     notes: tuple[str, ...] = ()
     """Things a reader of the results must know (dropped participants, left-out trials...)."""
 
@@ -330,9 +332,13 @@ def analyze(
     (Mascaró: the laughter type, as ``expression``, first); factors each participant saw at one level only are
     between-subject and named in :attr:`StudyAnalysis.notes`. An unknown name raises
     :class:`~mien.errors.UnknownNameError`; a bad table :class:`~mien.errors.InvalidValueError` (see
-    :func:`check_answers`).
+    :func:`check_answers`). ``source_sha256``: the hash of the file the table was read from; default the
+    hash of the table itself as exported (:func:`mien.study.export.answers_sha256`), so the provenance
+    always names what was analysed.
     """
     checked = check_answers(answers, source, from_csv=_from_csv)
+    if not source_sha256:
+        source_sha256 = answers_sha256(answers)
     protocol = str(checked["protocol"].iloc[0])
     factor_columns = _factor_columns(checked)
     notes: list[str] = []

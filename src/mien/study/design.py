@@ -33,10 +33,12 @@ from __future__ import annotations
 import hashlib
 import itertools
 import math
+import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+from urllib.parse import urlsplit
 
 from mien.affect.emotions import MAX_INTENSITY, STUDY_EXPRESSIONS, known_names, resolve_emotion
 from mien.errors import InvalidValueError, MienError, MissingAssetError, UnknownNameError
@@ -53,6 +55,8 @@ __all__ = [
     "VIEWS",
     "Design",
     "StimulusSpec",
+    "check_redirect_url",
+    "check_study_name",
     "load_design",
     "parse_design",
 ]
@@ -82,6 +86,11 @@ BROEKENS_ONLY_KEYS: tuple[str, ...] = ("expressions", "heads", "bases", "views",
 
 BASES: tuple[str, ...] = ("facs", "feature_points")
 """Expression bases (:class:`mien.character.Character` ``expression_basis``)."""
+
+STUDY_NAME_PATTERN = re.compile(r"\w[\w .+-]{0,99}")
+"""Accepted study names: a letter, digit or ``_`` first, then letters, digits, spaces or ``_ . + -``, up to
+100 characters. The name becomes the default database's file name (``NAME.sqlite`` next to the design), so
+no path separator, ``..`` or control character gets in."""
 
 _KEYS: dict[str, tuple[str, ...]] = {
     "": ("study", "stimuli", "design"),
@@ -177,6 +186,44 @@ class Design:
 
 def _fail(path: Path, key: str, value: Any, expected: str) -> InvalidValueError:
     return InvalidValueError(f"{path}: {key}", value, expected)
+
+
+def check_study_name(name: str, where: str = "study.name") -> str:
+    """``name`` when it fits :data:`STUDY_NAME_PATTERN` (no path characters: it names the database file),
+    else :class:`~mien.errors.InvalidValueError` naming ``where`` and the value.
+
+    >>> check_study_name("broekens-replication")
+    'broekens-replication'
+    """
+    if not isinstance(name, str) or not STUDY_NAME_PATTERN.fullmatch(name) or ".." in name:
+        raise InvalidValueError(
+            where, name, "a study name of letters, digits, spaces and _ . + - (no / \\ or ..; up to 100 characters)"
+        )
+    return name
+
+
+def check_redirect_url(url: str, where: str = "study.redirect_url") -> str:
+    """``url`` when it is empty or an ``http://`` / ``https://`` URL with a host, else
+    :class:`~mien.errors.InvalidValueError` naming ``where`` (a ``javascript:`` or ``data:`` URL would run in
+    the participant's page).
+
+    >>> check_redirect_url("https://app.prolific.com/submissions/complete?cc=XYZ")
+    'https://app.prolific.com/submissions/complete?cc=XYZ'
+    """
+    if url == "":
+        return url
+    try:
+        parts = urlsplit(url.replace("{participant}", "p"))
+    except ValueError:
+        parts = None
+    if (
+        parts is None
+        or parts.scheme.lower() not in ("http", "https")
+        or not parts.netloc
+        or any(ord(c) < 0x20 or c == "\x7f" or c.isspace() for c in url)
+    ):
+        raise InvalidValueError(where, url, "an http:// or https:// URL with a host, or '' for none")
+    return url
 
 
 def _check_keys(path: Path, table: Any, section: str, prefix: str) -> dict[str, Any]:
@@ -347,6 +394,7 @@ def parse_design(data: dict[str, Any], path: Path, sha256: str = "") -> Design:
     name = study.get("name")
     if not isinstance(name, str) or not name.strip():
         raise _fail(path, "study.name", name, "a non-empty study name")
+    check_study_name(name.strip(), f"{path}: study.name")
     protocol = study.get("protocol", "broekens")
     if protocol not in PROTOCOLS:
         raise UnknownNameError(f"protocol in {path} study.protocol", protocol, PROTOCOLS)
@@ -400,7 +448,9 @@ def parse_design(data: dict[str, Any], path: Path, sha256: str = "") -> Design:
         within=within,
         order=order,
         completion_code=_text(path, "study.completion_code", study.get("completion_code")),
-        redirect_url=_text(path, "study.redirect_url", study.get("redirect_url")),
+        redirect_url=check_redirect_url(
+            _text(path, "study.redirect_url", study.get("redirect_url")).strip(), f"{path}: study.redirect_url"
+        ),
         consent_text=_text(path, "study.consent_text", study.get("consent_text")),
         instructions_text=_text(path, "study.instructions_text", study.get("instructions_text")),
         duration_s=duration_s,

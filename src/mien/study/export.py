@@ -4,10 +4,15 @@ Columns, in order: ``study, participant, session_started_at, position, stimulus,
 design factors present (``head, identity, basis, view, distance_m, intensity`` or ``laughter_type,
 description``; empty when not applicable), then ``question, label_position, rating, nr_shows,
 answered_at`` (see :meth:`mien.study.storage.Store.answers_frame`).
+
+The CSV's bytes are the answers' canonical form: :func:`answers_sha256` of a frame read from the database is
+the SHA-256 of the file :func:`write_answers_csv` writes from it, so a report made from the database and one
+made from the exported file name the same answers with the same hash.
 """
 
 from __future__ import annotations
 
+import hashlib
 import os
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -19,7 +24,17 @@ if TYPE_CHECKING:
 
     from mien.study.storage import Store
 
-__all__ = ["read_answers_csv", "write_answers_csv"]
+__all__ = ["answers_csv_bytes", "answers_sha256", "read_answers_csv", "write_answers_csv"]
+
+
+def answers_csv_bytes(frame: pd.DataFrame) -> bytes:
+    """The answers ``frame`` as the UTF-8 CSV bytes :func:`write_answers_csv` writes (no index, ``\\n``)."""
+    return frame.to_csv(index=False, lineterminator="\n").encode("utf-8")
+
+
+def answers_sha256(frame: pd.DataFrame) -> str:
+    """Hex SHA-256 of :func:`answers_csv_bytes` of ``frame``: the hash of the CSV it would be exported as."""
+    return hashlib.sha256(answers_csv_bytes(frame)).hexdigest()
 
 
 def write_answers_csv(
@@ -35,7 +50,7 @@ def write_answers_csv(
     if path.parent and not path.parent.exists():
         path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path) as temporary:
-        frame.to_csv(temporary, index=False, lineterminator="\n")
+        Path(temporary).write_bytes(answers_csv_bytes(frame))
     return path, len(frame)
 
 

@@ -13,17 +13,22 @@ API (JSON):
 - ``POST /api/consent {"participant"}``
 - ``POST /api/show {"participant", "stimulus", "nr_shows"}`` -> the stored play count (idempotent: max).
 - ``POST /api/answer {"participant", "stimulus", "position", "ratings": {question: int}, "nr_shows"}`` ->
-  ``{"stored": new rows, "next_position", "done", ...}``; a repeated submit stores nothing twice.
-- ``GET /api/health``
+  ``{"stored": new rows, "next_position", "done", ...}``; a repeated submit stores nothing twice. Answers come
+  in the participant's order (a position after the first unanswered one is refused, 409) and only for a
+  stimulus that was shown (``nr_shows`` >= 1 here or from ``/api/show``; else 422).
+- ``GET /api/health`` -> ``{"status": "ok" | "degraded", "database": ..., ...}``: degraded while the
+  database is locked or unreachable.
 
-Bad requests get 4xx with a message naming the value; a locked or unreachable database gets 503 after the
-store's retries (the page retries); the server never dies of a request.
+Bad requests get 4xx with a message naming the value; a locked or unreachable database gets 503 with
+``Retry-After`` once the store's bound (``busy_timeout_s``) is spent (the page retries); the server never
+dies of a request.
 """
 
 # No ``from __future__ import annotations``: FastAPI reads the request models of the endpoints (classes local
 # to create_app) from the evaluated annotations.
 
 import contextlib
+import math
 import re
 import secrets
 import socket
@@ -31,9 +36,11 @@ import time
 from collections.abc import AsyncIterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
+from urllib.parse import quote
 
 from mien.errors import InvalidValueError
 from mien.extras import require
+from mien.study.design import check_redirect_url
 from mien.study.protocol import participant_plan, questions
 from mien.study.storage import StorageUnavailableError
 
@@ -88,6 +95,8 @@ def create_app(design: "Design", manifest: dict[str, Any], stimuli_folder: str |
     asked = {q.key: q for q in questions(design.protocol)}
     study = design.name
     plans: dict[str, ParticipantRecord] = {}
+    check_redirect_url(design.redirect_url, "redirect_url")  # a Design built in code passes here too
+    retry_after = str(max(1, math.ceil(store.busy_timeout_s)))
 
     class SessionRequest(BaseModel):
         participant: str | None = Field(default=None, max_length=128)
@@ -119,10 +128,10 @@ def create_app(design: "Design", manifest: dict[str, Any], stimuli_folder: str |
 
     @app.exception_handler(StorageUnavailableError)
     async def _unavailable(_request: Request, error: StorageUnavailableError) -> JSONResponse:
-        return JSONResponse({"detail": str(error)}, status_code=503, headers={"Retry-After": "1"})
+        return JSONResponse({"detail": str(error)}, status_code=503, headers={"Retry-After": retry_after})
 
     def record(participant: str) -> "ParticipantRecord":
-        if not PARTICIPANT_PATTERN.match(participant):
+        if not PARTICIPANT_PATTERN.fullmatch(participant):
             raise HTTPException(
                 422, f"participant {participant!r} is invalid: use 1-128 letters, digits or _ . @ : - in ?participant="
             )
@@ -140,7 +149,8 @@ def create_app(design: "Design", manifest: dict[str, Any], stimuli_folder: str |
         done = not remaining
         if done and rec.completed_at is None:
             store.record_completed(study, rec.participant)
-        redirect = design.redirect_url.replace("{participant}", rec.participant) if design.redirect_url else ""
+        # the id is quoted so it stays inside its place in the URL (ids may hold ':' and '@')
+        redirect = design.redirect_url.replace("{participant}", quote(rec.participant, safe="")) if done else ""
         return {
             "next_position": remaining[0] if remaining else len(rec.sequence),
             "answered": len(rec.sequence) - len(remaining),
@@ -160,7 +170,9 @@ def create_app(design: "Design", manifest: dict[str, Any], stimuli_folder: str |
 
     @app.get("/api/health")
     async def health() -> dict[str, Any]:  # async: answered on the event loop, no thread hop
-        return {"study": study, "protocol": design.protocol, "stimuli": len(entries)}
+        database = store.health()  # what the last operations found; never waits for the database
+        status = "ok" if database["database"] == "ok" else "degraded"
+        return {"status": status, "study": study, "protocol": design.protocol, "stimuli": len(entries), **database}
 
     @app.get("/stimuli/{name}")
     def stimulus_file(name: str) -> FileResponse:
@@ -171,7 +183,7 @@ def create_app(design: "Design", manifest: dict[str, Any], stimuli_folder: str |
     @app.post("/api/session")
     def session(request: SessionRequest) -> dict[str, Any]:
         participant = request.participant or secrets.token_hex(6)
-        if not PARTICIPANT_PATTERN.match(participant):
+        if not PARTICIPANT_PATTERN.fullmatch(participant):
             raise HTTPException(
                 422, f"participant {participant!r} is invalid: use 1-128 letters, digits or _ . @ : - in ?participant="
             )
@@ -250,6 +262,21 @@ def create_app(design: "Design", manifest: dict[str, Any], stimuli_folder: str |
             q = asked[key]
             if not q.low <= value <= q.high:
                 raise HTTPException(422, f"rating {key}={value} is invalid: expected an integer {q.low}..{q.high}")
+        answered, shows = store.progress(study, rec.participant)
+        first_open = next((k for k, s in enumerate(rec.sequence) if s not in answered), len(rec.sequence))
+        if request.position > first_open:
+            raise HTTPException(
+                409,
+                f"position {request.position} of participant {rec.participant!r} comes after the unanswered "
+                f"position {first_open} ({rec.sequence[first_open]!r}): answer the stimuli in order",
+            )
+        nr_shows = request.nr_shows or shows.get(request.stimulus, 0)  # the page's count, else the server's
+        if nr_shows < 1 and request.stimulus not in answered:
+            raise HTTPException(
+                422,
+                f"nr_shows={request.nr_shows} is invalid: stimulus {request.stimulus!r} was never shown to participant "
+                f"{rec.participant!r}; play it (POST /api/show) before rating it",
+            )
         label_positions = {key: k for k, key in enumerate(rec.label_order) if asked[key].is_label}
         stored = store.record_answer(
             study,
@@ -258,7 +285,7 @@ def create_app(design: "Design", manifest: dict[str, Any], stimuli_folder: str |
             request.position,
             request.ratings,
             label_positions,
-            request.nr_shows,
+            nr_shows,
         )
         reply = {"stored": stored, **status(rec)}
         # time spent in this handler (validation + commit + progress read), for load tests and monitoring

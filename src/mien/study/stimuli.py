@@ -10,7 +10,11 @@ basis and camera.
 
 Each finished video gets a small ``.sNNN.done.json`` record (what was rendered and the file's SHA-256); a
 re-run skips stimuli whose record and hash still match, so a late failure keeps the finished videos and the
-next run resumes. ``manifest.json`` is written last, atomically.
+next run resumes. What was rendered includes the head as resolved here (:func:`rendered_head`: ``default``
+is ICT-FaceKit when installed, else the built-in head), its identity and its asset's hash, so installing,
+removing or changing a head's asset renders its stimuli again; the manifest records it per stimulus
+(``rendered_head``). ``manifest.json`` is written last, atomically, with the design's SHA-256; a manifest
+made from another version of the design is refused where it is used (:func:`check_design_sha256`).
 """
 
 from __future__ import annotations
@@ -29,18 +33,30 @@ from mien.extras import require
 from mien.fileio.hashing import file_sha256
 from mien.fileio.streams import atomic_path, write_text
 from mien.heads import load_head
+from mien.heads.registry import file_fingerprint
+from mien.paths import require_asset
 from mien.progress import progress as progress_bar
 from mien.render.camera import View
 from mien.render.clip_render import iter_frames, make_renderer
 from mien.render.video import Mp4Writer
 from mien.rig.animate import face_to_rig
+from mien.rig.heads import resolve_head_name
 
 if TYPE_CHECKING:
     import numpy as np
 
     from mien.study.design import Design, StimulusSpec
 
-__all__ = ["MANIFEST_NAME", "StimuliResult", "check_video", "file_sha256", "load_manifest", "make_stimuli"]
+__all__ = [
+    "MANIFEST_NAME",
+    "StimuliResult",
+    "check_design_sha256",
+    "check_video",
+    "file_sha256",
+    "load_manifest",
+    "make_stimuli",
+    "rendered_head",
+]
 
 MANIFEST_NAME = "manifest.json"
 """File name of the manifest inside the stimuli folder."""
@@ -87,12 +103,42 @@ def check_video(path: str | os.PathLike[str]) -> tuple[float, float]:
     return n_frames / fps, fps
 
 
-def _spec_key(design: Design, spec: StimulusSpec) -> str:
+def rendered_head(head: str, identity: str = "") -> dict[str, str]:
+    """What the design's ``head`` / ``identity`` stand for here: ``{"head": the source that renders it
+    ("builtin", "ict"), "identity": the preset ("default" / "mean" when none is named), "asset_sha256": the
+    hash of the head's asset ('' for the built-in head, which mien's code makes; ICT-FaceKit: the hash of its
+    FaceXModel folder's files, :func:`mien.heads.registry.file_fingerprint`)}``.
+
+    Raises :class:`~mien.errors.MissingAssetError` when the head needs an asset that is not installed.
+    """
+    name = resolve_head_name(head)
+    if name == "ict":
+        folder = require_asset("ict_facekit") / "FaceXModel"
+        if not folder.is_dir():
+            raise MissingAssetError(
+                f"ICT-FaceKit folder {folder.parent} has no FaceXModel/: point MIEN_ICT_FACEKIT at a full checkout"
+            )
+        return {"head": name, "identity": identity or "mean", "asset_sha256": file_fingerprint(folder)}
+    if name == "file":
+        return {"head": name, "identity": identity, "asset_sha256": file_fingerprint(identity)}
+    return {"head": name, "identity": identity or "default", "asset_sha256": ""}
+
+
+def _design_head(design: Design, spec: StimulusSpec) -> tuple[str, str]:
+    """(head, identity) the design asks for ``spec`` (Mascaró stimuli: the default head)."""
+    if design.protocol == "mascaro":
+        return "default", ""
+    return str(spec.conditions.get("head", "default")), str(spec.conditions.get("identity", ""))
+
+
+def _spec_key(design: Design, spec: StimulusSpec, head: dict[str, str] | None = None) -> str:
+    """What a finished stimulus must match to be kept (``head``: :func:`rendered_head` of a rendered one)."""
     key: dict[str, Any] = {"expression": spec.expression, "conditions": spec.conditions}
     if spec.file is None:
         key.update(
             duration_s=design.duration_s, onset_s=design.onset_s, fps=design.fps, size=design.size, seed=design.seed
         )
+        key["rendered_head"] = head
     else:
         key["source_sha256"] = file_sha256(spec.file)
     return json.dumps(key, sort_keys=True)
@@ -164,16 +210,17 @@ def _face_clip(design: Design, spec: StimulusSpec) -> tuple[Any, np.ndarray | No
     return clip, character.last_feature_weights
 
 
-def _render(design: Design, spec: StimulusSpec, scenes: _Scenes, video: Path) -> tuple[float, float]:
+def _render(design: Design, spec: StimulusSpec, scenes: _Scenes, video: Path, head: str = "") -> tuple[float, float]:
+    """Render ``spec`` into ``video``; ``head``: the resolved head (:func:`rendered_head`), default the design's."""
 
     conditions = spec.conditions
-    head = str(conditions.get("head", "default"))
-    identity = str(conditions.get("identity", ""))
+    design_head, identity = _design_head(design, spec)
+    head = head or design_head  # the source resolved when the key was made, so the record says what was drawn
     basis = str(conditions.get("basis", "facs"))
     view = str(conditions.get("view", "frontal"))
     distance = float(conditions.get("distance_m", 1.0))
     if design.protocol == "mascaro":
-        head, identity, basis, view, distance = "default", "", "facs", "frontal", 1.0
+        basis, view, distance = "facs", "frontal", 1.0
     rig_key = (head, identity, basis)
     rig = scenes.rig(*rig_key)
     clip, features = _face_clip(design, spec)
@@ -206,10 +253,17 @@ def make_stimuli(
             supplied[spec.id] = check_video(spec.file)
     folder.mkdir(parents=True, exist_ok=True)
     scenes = _Scenes(design.size)
+    heads: dict[tuple[str, str], dict[str, str]] = {}  # (head, identity) of the design -> rendered_head
     entries, rendered, skipped = [], 0, 0
     try:
         for spec in progress_bar(design.stimuli, total=len(design.stimuli), desc="stimuli", enabled=progress):
-            key = _spec_key(design, spec)
+            head: dict[str, str] | None = None
+            if spec.file is None:
+                wanted = _design_head(design, spec)
+                if wanted not in heads:
+                    heads[wanted] = rendered_head(*wanted)
+                head = heads[wanted]
+            key = _spec_key(design, spec, head)
             record = _finished(folder, spec, key)
             was_done = record is not None
             if record is None:
@@ -220,7 +274,8 @@ def make_stimuli(
                         shutil.copyfile(spec.file, temporary)
                     duration_s, fps = supplied[spec.id]
                 else:
-                    duration_s, fps = _render(design, spec, scenes, video)
+                    assert head is not None
+                    duration_s, fps = _render(design, spec, scenes, video, head["head"])
                 record = {
                     "key": key,
                     "file": video.name,
@@ -243,6 +298,7 @@ def make_stimuli(
                     "conditions": spec.conditions,
                     "duration_s": record["duration_s"],
                     "fps": record["fps"],
+                    **({"rendered_head": head} if head is not None else {}),
                 }
             )
     finally:
@@ -256,6 +312,20 @@ def make_stimuli(
     path = folder / MANIFEST_NAME
     _write_json_atomic(path, manifest)
     return StimuliResult(path, manifest, rendered, skipped)
+
+
+def check_design_sha256(manifest: dict[str, Any], design: Design, folder: str | os.PathLike[str]) -> None:
+    """Refuse (:class:`~mien.errors.InvalidValueError` naming the manifest and the design) a ``manifest`` from
+    ``folder`` whose ``design_sha256`` is not the SHA-256 of ``design``'s file: the design changed after its
+    stimuli were made, so they may not be the ones it describes."""
+    recorded = manifest.get("design_sha256")
+    if recorded != design.sha256:
+        raise InvalidValueError(
+            f"{Path(folder) / MANIFEST_NAME}: design_sha256",
+            recorded,
+            f"{design.sha256}, the SHA-256 of {design.path}: the design changed after these stimuli were made; "
+            f"re-run `mien study stimuli {design.path}` (it makes again only what changed)",
+        )
 
 
 def load_manifest(folder: str | os.PathLike[str], verify: bool = True) -> dict[str, Any]:

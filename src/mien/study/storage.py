@@ -3,8 +3,11 @@
 Every answer is committed in its own transaction the moment it is given, keyed by (study, participant,
 stimulus, question) with ``INSERT ... ON CONFLICT DO NOTHING``: a double submit or a replayed page stores
 nothing twice, and a killed server or a closed browser loses nothing already answered. SQLite runs in WAL
-mode with a busy timeout; a database that stays locked or unreachable after a few retries raises
-:class:`StorageUnavailableError` (the runner answers HTTP 503), never a silent loss.
+mode. Every operation waits at most ``busy_timeout_s`` (:data:`BUSY_TIMEOUT_S`) in all, retries and lock
+waits together; a database that stays locked or unreachable that long raises
+:class:`StorageUnavailableError` (the runner answers HTTP 503 with ``Retry-After``), never a silent loss.
+While the database is unavailable, a second writer does not queue behind the one already waiting: it is
+refused at once, so one held lock costs each request at most the bound (:meth:`Store.health` says so).
 
 Tables: ``stimuli`` (the manifest: id, expression, conditions as JSON, file, hash), ``participants``
 (their stored plan: sequence, label order, block order, arrival ordinal), ``shows`` (replays per stimulus,
@@ -57,11 +60,24 @@ TAIL_COLUMNS: tuple[str, ...] = ("question", "label_position", "rating", "nr_sho
 """Last columns of the long answers table."""
 
 RETRIES = 5
-"""Attempts of one database operation before :class:`StorageUnavailableError`."""
+"""Most attempts of one database operation before :class:`StorageUnavailableError` (all within the bound)."""
+
+BUSY_TIMEOUT_S = 3.0
+"""Default bound, seconds, on the time one database operation may wait for a lock or a connection, retries
+included (``mien study serve --busy-timeout``)."""
 
 
 class StorageUnavailableError(MienError):
-    """The database stayed locked or unreachable after :data:`RETRIES` attempts; nothing was stored."""
+    """The database stayed locked or unreachable for the whole bound; nothing was stored."""
+
+
+class _WriterQueueTimeout(Exception):
+    """The in-process writer lock was not free within ``wait_s`` seconds (0: the database is unavailable and
+    another writer is already waiting for it)."""
+
+    def __init__(self, wait_s: float) -> None:
+        super().__init__(wait_s)
+        self.wait_s = wait_s
 
 
 def now_iso() -> str:
@@ -167,14 +183,23 @@ class Store:
     """The study database at ``url`` (a SQLAlchemy URL; see :func:`database_url`). Creates its tables.
 
     Thread-safe (a connection pool); every method is one transaction, retried on a locked or lost
-    database. ``retry_s`` is the first back-off, doubled per attempt; ``busy_timeout_s`` how long SQLite waits
-    for a lock inside one attempt (PostgreSQL: the connect timeout).
+    database. ``retry_s`` is the first back-off, doubled per attempt; ``busy_timeout_s`` (seconds, > 0) bounds
+    the whole operation: SQLite's lock waits, the in-process writer queue and the retries together
+    (PostgreSQL: also the connect timeout).
     """
 
-    def __init__(self, url: str, retry_s: float = 0.05, busy_timeout_s: float = 5.0) -> None:
+    def __init__(self, url: str, retry_s: float = 0.05, busy_timeout_s: float = BUSY_TIMEOUT_S) -> None:
         sa = require("sqlalchemy", "study")
+        if not (isinstance(busy_timeout_s, int | float) and 0 < busy_timeout_s <= 3600):
+            raise InvalidValueError("busy_timeout_s", busy_timeout_s, "a number of seconds in (0, 3600]")
         self.url = url
         self.retry_s = retry_s
+        self.busy_timeout_s = float(busy_timeout_s)
+        self._local = threading.local()  # the running operation's deadline (time.monotonic seconds)
+        self._health_lock = threading.Lock()
+        self._unavailable_since: str | None = None  # ISO time of the first failure of the current outage
+        self._unavailable_error = ""
+        self._unavailable_count = 0  # operations refused since the store opened
         self._sa = sa
         self.is_sqlite = url.startswith("sqlite")
         insert: Any
@@ -199,7 +224,11 @@ class Store:
                 url,
                 pool_size=10,
                 max_overflow=10,  # no pre-ping round trip per checkout: a dropped connection is retried
-                connect_args={"connect_timeout": max(1, round(busy_timeout_s))},
+                # a row or table lock held elsewhere is waited for no longer than the bound either
+                connect_args={
+                    "connect_timeout": max(1, round(busy_timeout_s)),
+                    "options": f"-c lock_timeout={int(busy_timeout_s * 1000)}",
+                },
             )
         self._insert = insert
         self._write_lock = threading.Lock() if self.is_sqlite else None
@@ -207,17 +236,36 @@ class Store:
         self._meta, self.tables = _schema()
         self._retry(lambda: self._meta.create_all(self.engine))
 
+    def _remaining_s(self) -> float:
+        """Seconds left of the running operation's bound (the whole bound outside :meth:`_retry`)."""
+        deadline = getattr(self._local, "deadline", None)
+        return self.busy_timeout_s if deadline is None else max(0.0, deadline - time.monotonic())
+
     @contextlib.contextmanager
     def _writing(self) -> Iterator[Any]:
         """A write transaction. SQLite: one writer at a time in this process (a lock, so threads queue in
-        order instead of sleeping in SQLite's busy handler, which costs tens of ms per clash); other
-        processes are still waited for with the busy timeout."""
+        order instead of sleeping in SQLite's busy handler, which costs tens of ms per clash), waited for no
+        longer than the operation's bound, and not at all while the database is known to be unavailable (the
+        writer already waiting is enough); SQLite's own busy timeout is set to what is left of the bound."""
         if self._write_lock is None:
             with self.engine.begin() as connection:
                 yield connection
             return
-        with self._write_lock, self.engine.begin() as connection:
-            yield connection
+        wait_s = 0.0 if self._unavailable_since is not None else self._remaining_s()
+        if not self._write_lock.acquire(timeout=wait_s):
+            raise _WriterQueueTimeout(wait_s)
+        try:
+            with self.engine.connect() as connection:
+                raw = connection.connection.dbapi_connection
+                assert raw is not None
+                raw.execute(f"PRAGMA busy_timeout={max(1, int(self._remaining_s() * 1000))}")
+                try:
+                    with connection.begin():
+                        yield connection
+                finally:
+                    raw.execute(f"PRAGMA busy_timeout={int(self.busy_timeout_s * 1000)}")
+        finally:
+            self._write_lock.release()
 
     def close(self) -> None:
         """Close every pooled connection."""
@@ -229,26 +277,72 @@ class Store:
     def __exit__(self, *exc: object) -> None:
         self.close()
 
+    def health(self) -> dict[str, Any]:
+        """The database's state as the last operations found it: ``{"database": "ok" | "unavailable",
+        "unavailable_since": ISO time or None, "error": the last failure ('' when ok), "refused": operations
+        refused with :class:`StorageUnavailableError` since the store opened, "busy_timeout_s": the bound}``."""
+        with self._health_lock:
+            return {
+                "database": "ok" if self._unavailable_since is None else "unavailable",
+                "unavailable_since": self._unavailable_since,
+                "error": self._unavailable_error,
+                "refused": self._unavailable_count,
+                "busy_timeout_s": self.busy_timeout_s,
+            }
+
+    def _failed(self, reason: str, attempts: int, started: float) -> StorageUnavailableError:
+        waited_s = time.monotonic() - started
+        message = (
+            f"the study database {self.engine.url.render_as_string(hide_password=True)} is locked or unreachable "
+            f"({reason}; {attempts} attempt{'s' if attempts != 1 else ''} in {waited_s:.1f} s, bound "
+            f"{self.busy_timeout_s:g} s); nothing was stored, try again"
+        )
+        with self._health_lock:
+            if self._unavailable_since is None:
+                self._unavailable_since = now_iso()
+            self._unavailable_error = reason
+            self._unavailable_count += 1
+        return StorageUnavailableError(message)
+
     def _retry(self, operation: Callable[[], T]) -> T:
+        """Run ``operation`` until it succeeds, retrying a locked or lost database with back-off, for at most
+        :data:`RETRIES` attempts and ``busy_timeout_s`` seconds in all."""
         from sqlalchemy.exc import DBAPIError, OperationalError
 
+        started = time.monotonic()
+        outer = getattr(self._local, "deadline", None)
+        self._local.deadline = started + self.busy_timeout_s if outer is None else outer
         delay = self.retry_s
-        for attempt in range(RETRIES):
-            try:
-                return operation()
-            except (OperationalError, DBAPIError) as error:
-                transient = isinstance(error, OperationalError) or bool(getattr(error, "connection_invalidated", False))
-                if not transient:
-                    raise
-                if attempt == RETRIES - 1:
-                    reason = str(getattr(error, "orig", error)).strip().splitlines()[0]
-                    raise StorageUnavailableError(
-                        f"the study database {self.engine.url.render_as_string(hide_password=True)} is locked or "
-                        f"unreachable after {RETRIES} attempts ({reason}); nothing was stored, try again"
-                    ) from None
-                time.sleep(delay)
-                delay *= 2
-        raise AssertionError("unreachable")
+        try:
+            for attempt in range(1, RETRIES + 1):
+                try:
+                    result = operation()
+                except _WriterQueueTimeout as error:
+                    reason = (
+                        "another request is already waiting for it"
+                        if error.wait_s == 0
+                        else f"the writers before this one held it {error.wait_s:.1f} s"
+                    )
+                    raise self._failed(reason, attempt, started) from None
+                except (OperationalError, DBAPIError) as error:
+                    transient = isinstance(error, OperationalError) or bool(
+                        getattr(error, "connection_invalidated", False)
+                    )
+                    if not transient:
+                        raise
+                    if attempt == RETRIES or self._remaining_s() < delay:
+                        reason = str(getattr(error, "orig", error)).strip().splitlines()[0]
+                        raise self._failed(reason, attempt, started) from None
+                    time.sleep(delay)
+                    delay *= 2
+                else:
+                    if self._unavailable_since is not None:
+                        with self._health_lock:
+                            self._unavailable_since, self._unavailable_error = None, ""
+                    return result
+            raise AssertionError("unreachable")
+        finally:
+            self._local.deadline = outer
 
     # ---------------------------------------------------------------- writes
 
