@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from mien.errors import InvalidValueError
-from mien.exchange import clip_json, clip_npz, curves_csv, openface_csv, openfacs_jsonl
+from mien.exchange import clip_json, clip_npz, curves_csv, maya_anim, openface_csv, openfacs_jsonl
 from mien.exchange import glb as glb_format
 from mien.facs.clip import Clip
 from mien.fileio.glb import GlbError, pack_glb, read_accessor
@@ -98,3 +98,17 @@ def test_text_readers_check_rows_times_columns() -> None:
         with pytest.raises(InvalidValueError, match=r"take\.json size.*commas"):
             clip_json.read(_stream(clip, "take.json"))
     assert openfacs_jsonl.read(_stream(lines, "take.jsonl")).n_frames == 100  # the default limits fit
+
+
+def test_an_anim_header_cannot_ask_for_a_billion_frames() -> None:
+    """``endTime 1000000000`` in a 330-byte ``.anim`` asked for 10^9 frames (8 GB) before the check."""
+    text = (
+        b"animVersion 1.1;\nmayaVersion 2020;\ntimeUnit film;\nlinearUnit cm;\nangularUnit deg;\nstartTime 0;\n"
+        b"endTime 1000000000;\nanim w w mien 0 0 0;\nanimData {\n  input time;\n  output unitless;\n  weighted 0;\n"
+        b"  preInfinity constant;\n  postInfinity constant;\n  keys {\n    0 0 linear linear 1 1 0;\n"
+        b"    1000000000 1 linear linear 1 1 0;\n  }\n}\n"
+    )
+    with pytest.raises(InvalidValueError, match=r"anim size.*1000000001 values \(frames x curves\)"):
+        maya_anim.read(_stream(text, "bomb.anim"))
+    small = text.replace(b"1000000000", b"48")
+    assert maya_anim.read(_stream(small, "ok.anim")).n_frames == 49

@@ -34,6 +34,7 @@ from mien.errors import InvalidValueError
 from mien.exchange.key_reduction import default_tolerance, reduce_keys
 from mien.exchange.timing import resample
 from mien.facs.clip import Clip
+from mien.fileio.limits import check_count, current
 from mien.fileio.streams import Source, TargetT, read_bytes, refuse_rig, source_name, write_text
 
 __all__ = [
@@ -569,6 +570,8 @@ def to_clip(anim: AnimFile, fps: float | None = None) -> Clip:
         raise InvalidValueError("anim", "no curves", "a file with at least one animated curve")
     duration_s = (anim.end_frame - anim.start_frame) / anim.fps
     n_frames = math.floor(duration_s * rate + 1e-9) + 1
+    # a few bytes of header (endTime 1e9) must not make a clip of gigabytes: checked before allocating
+    check_count("anim", "values (frames x curves)", n_frames * len(anim.curves), current().clip_values)
     frames = anim.start_frame + np.arange(n_frames) * (anim.fps / rate)
     values = np.stack([evaluate_curve(c, frames, anim.fps) for c in anim.curves.values()], axis=1)
     return Clip(values, rate, tuple(anim.curves))

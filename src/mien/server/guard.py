@@ -112,7 +112,8 @@ class AccessPolicy:
         """Why a request with these (lower-case) headers is refused, or None when it passes."""
         host_header = headers.get("host", "")
         host = _host_name(host_header)
-        if self.loopback_only and not is_loopback(host) and host not in self._origin_hosts:
+        # no Host at all (an HTTP/1.0 tool) is no browser, and so no rebinding: only a wrong one is refused
+        if self.loopback_only and host_header and not is_loopback(host) and host not in self._origin_hosts:
             return (
                 f"Host {host_header!r} is not an address of this server (a loopback server answers localhost and "
                 "loopback IPs; allow another name with mien serve --allow-origin)"
