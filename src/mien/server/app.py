@@ -81,7 +81,7 @@ class LiveServer:
         """The characters."""
         self.clock = Clock(self.registry, config.tick_hz)
         """The fixed-rate clock."""
-        self.hub = Hub(self.registry, config.max_viewers)
+        self.hub = Hub(self.registry, config.max_viewers, config.tick_hz)
         """The WebSocket viewers."""
         self.clock.listeners.append(self.hub.on_tick)
         self.token: str | None = config.token
@@ -144,7 +144,8 @@ class LiveServer:
         """What ``/api/health`` adds to the counters: ``status`` (``"ok"``, or ``"degraded"`` while ticks fail or
         run late (:meth:`Clock.health <mien.server.scheduler.Clock.health>`) or a character is quarantined),
         ``degraded`` (the reasons), ``quarantined`` (id -> why), ``datagrams_dropped_by_os`` (None where the system
-        does not say), ``viewers_refused``, ``max_viewers``, ``step_failures``."""
+        does not say), ``viewers_refused``, ``frames_thinned``, ``frame_stride``, ``max_viewers``,
+        ``step_failures``."""
         reasons = self.clock.health()
         quarantined = dict(self.registry.quarantined)
         if quarantined:
@@ -156,6 +157,8 @@ class LiveServer:
             "quarantined": quarantined,
             "datagrams_dropped_by_os": os_dropped_datagrams(self._udp.sock) if self._udp is not None else None,
             "viewers_refused": counters.viewers_refused,
+            "frames_thinned": counters.frames_thinned,
+            "frame_stride": self.hub.stride,
             "max_viewers": self.hub.max_viewers,
             "step_failures": counters.step_failures,
         }

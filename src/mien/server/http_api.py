@@ -48,6 +48,8 @@ class Health(BaseModel):
     step_failures: int = Field(description="Ticks whose step failed (a character was quarantined)")
     datagrams_dropped_by_os: int | None = Field(description="UDP datagrams the OS dropped (full queue; null: unknown)")
     viewers_refused: int = Field(description="WebSocket viewers refused past max_viewers (close code 1013)")
+    frames_thinned: int = Field(description="Frames not sent to viewers because the clock ran late")
+    frame_stride: int = Field(description="Viewers get every frame_stride-th tick's frame (1; more while late)")
     max_viewers: int = Field(description="Most WebSocket viewers served at once")
     uptime_s: float = Field(description="Seconds since the server started")
     tick_hz: float = Field(description="Clock rate, ticks per second")

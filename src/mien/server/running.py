@@ -29,6 +29,7 @@ class RunningServer(Protocol):
 
     def health_state(self) -> dict[str, Any]:
         """``status`` (``"ok"`` or ``"degraded"``), ``degraded`` (reasons), ``quarantined``,
-        ``datagrams_dropped_by_os``, ``viewers_refused``, ``max_viewers``, ``step_failures``: see
+        ``datagrams_dropped_by_os``, ``viewers_refused``, ``frames_thinned``, ``frame_stride``, ``max_viewers``,
+        ``step_failures``: see
         :meth:`mien.server.app.LiveServer.health_state`."""
         ...

@@ -35,6 +35,8 @@ class Counters:
     """WebSocket frames handed to viewers."""
     frames_dropped: int = 0
     """Frames replaced by a newer one before a slow viewer read them."""
+    frames_thinned: int = 0
+    """Frames not handed to viewers because the clock ran late (see :attr:`mien.server.websocket.Hub.stride`)."""
     viewers_refused: int = 0
     """WebSocket viewers refused because the server had its maximum of viewers."""
     step_failures: int = 0

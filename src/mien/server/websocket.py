@@ -2,13 +2,16 @@
 format), JSON commands from viewers. A slow viewer never blocks the clock: each viewer has a one-frame slot
 that keeps only the newest frame. At most :attr:`Hub.max_viewers` viewers are served (``mien serve
 --max-viewers``): each costs the loop a send per tick, so past the cap a new one is closed with code 1013 ("try
-again later") and counted (``viewers_refused``) instead of slowing the clock for everyone."""
+again later") and counted (``viewers_refused``) instead of slowing the clock for everyone. Should the sends still
+make the clock run late, viewers get every 2nd, 4th... (up to :data:`MAX_FRAME_STRIDE`) tick's frame until it
+is on time again (counted as ``frames_thinned``): the clock's rate comes first."""
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
 import logging
+import time
 from typing import Any
 
 from mien.errors import InvalidValueError
@@ -16,13 +19,16 @@ from mien.server.protocol import MessageRejected, Rejection, encode_frame, parse
 from mien.server.registry import Registry
 from mien.server.stats import RateLimitedLog
 
-__all__ = ["DEFAULT_MAX_VIEWERS", "TRY_AGAIN_LATER", "Hub", "Viewer"]
+__all__ = ["DEFAULT_MAX_VIEWERS", "MAX_FRAME_STRIDE", "TRY_AGAIN_LATER", "Hub", "Viewer"]
 
 log = logging.getLogger("mien.server")
 
 DEFAULT_MAX_VIEWERS = 200
 """Viewers served at once by default (bench/server_viewers.py: the clock keeps its rate with this many viewers
 that never read)."""
+
+MAX_FRAME_STRIDE = 8
+"""Under load viewers get at least every 8th tick's frame (7.5 frames/s at 60 Hz)."""
 
 TRY_AGAIN_LATER = 1013
 """WebSocket close code of a viewer refused because the server is full (RFC 6455 registry: Try Again Later)."""
@@ -31,9 +37,11 @@ TRY_AGAIN_LATER = 1013
 class Viewer:
     """One connected viewer: the character it watches and its newest unsent frame."""
 
-    def __init__(self, watching: str | None) -> None:
+    def __init__(self, watching: str | None, slot: int = 0) -> None:
         self.watching = watching
         """Id of the watched character."""
+        self.slot = slot
+        """Its turn while frames are thinned (:attr:`Hub.stride`)."""
         self.latest: bytes | None = None
         """Newest frame not yet sent."""
         self.ready = asyncio.Event()
@@ -43,7 +51,7 @@ class Viewer:
 class Hub:
     """Viewers and the per-tick fan-out (register :meth:`on_tick` with the clock)."""
 
-    def __init__(self, registry: Registry, max_viewers: int = DEFAULT_MAX_VIEWERS) -> None:
+    def __init__(self, registry: Registry, max_viewers: int = DEFAULT_MAX_VIEWERS, tick_hz: float = 60.0) -> None:
         if isinstance(max_viewers, bool) or not isinstance(max_viewers, int) or max_viewers < 0:
             raise InvalidValueError("max_viewers", max_viewers, "a number of viewers >= 0")
         self.registry = registry
@@ -51,15 +59,57 @@ class Hub:
         """Most viewers served at once; more are closed with :data:`TRY_AGAIN_LATER` and counted."""
         self.viewers: set[Viewer] = set()
         """Connected viewers."""
+        self.stride = 1
+        """Viewers get every ``stride``-th tick's frame: doubled (up to :data:`MAX_FRAME_STRIDE`) while the clock
+        runs late, halved after 2 s on time."""
+        self._period_s = 1.0 / tick_hz
+        self._origin: float | None = None  # least perf_counter() - t_s seen: when a tick on time reaches the hub
+        self._last_tick = -1
+        self._changed = self._calm_since = self._lateness = 0.0
+        self._send_s = 0.0  # loop time spent sending frames since the last tick
+        self._send_share = 0.0  # smoothed share of the loop's time spent sending frames
+        self._paced_at = 0.0
+        self._round = 0  # ticks handed to the hub; a viewer's turn is when (slot + round) % stride == 0
+        self._slots = 0
         self._log = RateLimitedLog(prefix="viewer refused")
 
+    def _pace(self, tick: int, t_s: float) -> None:
+        """Adapt :attr:`stride` to how late this tick reached the hub: doubled when ticks keep running late while
+        sending frames takes over a fifth of the loop's time, halved after 2 s on time."""
+        now = time.perf_counter()
+        if self._origin is None or now - t_s < self._origin:
+            self._origin = now - t_s
+        if self._paced_at:
+            share = self._send_s / max(now - self._paced_at, 1e-6)
+            self._send_share = 0.9 * self._send_share + 0.1 * min(share, 1.0)
+        self._paced_at, self._send_s = now, 0.0
+        skipped = max(0, tick - self._last_tick - 1) if self._last_tick >= 0 else 0
+        late = skipped > 0 or now - t_s - self._origin > 0.5 * self._period_s
+        self._last_tick = tick
+        self._lateness = 0.9 * self._lateness + (1 + skipped if late else 0)  # a hiccup is not a load
+        if late:
+            self._calm_since = now
+            sending = self._send_share > 0.2  # late because of the sends, not of the machine
+            if sending and self._lateness > 2.5 and self.stride < MAX_FRAME_STRIDE and now - self._changed >= 0.5:
+                self.stride *= 2  # (0.5 s: let the last change show first)
+                self._changed = now
+        elif self.stride > 1 and now - max(self._calm_since, self._changed) >= 2.0:
+            self.stride //= 2
+            self._changed = now
+
     def on_tick(self, tick: int, t_s: float) -> None:
-        """Encode one frame per watched character and hand it to its viewers (drops their older frame)."""
+        """Encode one frame per watched character and hand it to its viewers (drops their older frame); while the
+        clock runs late, each viewer every :attr:`stride`-th tick, in turns, so the sends spread over the ticks."""
         if not self.viewers:
             return
         counters = self.registry.counters
+        self._pace(tick, t_s)
+        stride, self._round = self.stride, self._round + 1
         frames: dict[str, bytes | None] = {}
         for viewer in self.viewers:
+            if stride > 1 and (viewer.slot + self._round) % stride:
+                counters.frames_thinned += 1
+                continue
             watching = viewer.watching or self.registry.default_id
             if watching is None:
                 continue
@@ -96,7 +146,8 @@ class Hub:
             with contextlib.suppress(Exception):
                 await websocket.close(code=TRY_AGAIN_LATER, reason=f"server full ({self.max_viewers} viewers)")
             return
-        viewer = Viewer(watching)
+        viewer = Viewer(watching, self._slots)
+        self._slots += 1
         self.viewers.add(viewer)
         sender = asyncio.create_task(self._send(websocket, viewer))
         try:
@@ -114,7 +165,11 @@ class Hub:
                 viewer.ready.clear()
                 data, viewer.latest = viewer.latest, None
                 if data is not None:
+                    begin = time.perf_counter()
                     await websocket.send_bytes(data)
+                    spent = time.perf_counter() - begin
+                    if spent < self._period_s:  # a send that waited for a slow reader cost the loop little
+                        self._send_s += spent
         except asyncio.CancelledError:
             raise
         except Exception as exc:  # the viewer went away; the receiver notices and cleans up
