@@ -176,3 +176,43 @@ def test_ict_glb_to_live_link_keeps_the_52_weights(inputs: Path, tmp_path: Path)
     weights, live = read_clip(path), read_clip(target)
     for name in ("eyeBlinkLeft", "browDownLeft", "mouthSmileLeft"):
         np.testing.assert_allclose(live.channel(name), weights.channel(name), atol=1e-6)
+
+
+def test_a_character_file_mien_animated_reads_back_as_the_heads_weights_and_angles(inputs: Path) -> None:
+    valid = read_clip(_input(inputs, "valid.glb"))
+    builtin, face = read_clip(inputs / "builtin.glb"), read_clip(inputs / "face.npz")
+    assert "h_expressions.Kiss_h" not in valid.channels and "mouthSmileLeft" in valid.channels
+    for name in ("mouthSmileLeft", "cheekSquintRight", "eyeSquintLeft"):  # the AU mapping, on either head
+        assert valid.channel(name).max() > 0.1
+        np.testing.assert_allclose(valid.channel(name), builtin.channel(name), atol=1e-5)
+    for name in ("head_yaw_deg", "head_pitch_deg", "head_roll_deg"):  # mien's angles, not the bone's rotation
+        np.testing.assert_allclose(valid.channel(name), face.channel(name), atol=1e-3)
+
+
+def test_untrusted_extras_leave_a_files_own_shapes() -> None:
+    from mien.exchange.glb_user import MAX_EXTRAS_ROWS, head_turns, target_clip
+    from mien.facs.clip import Clip
+
+    shapes = Clip(np.array([[0.2, 0.6], [0.4, 0.8]]), 30.0, ("smile", "Jaw.Open"))
+    rows = {
+        "mouthSmileLeft": [["smile", 1.0, "L"]],
+        "mouthSmileRight": [["smile", 1.0, "R"]],
+        "jawOpen": [["Jaw.Open", 2.0, ""]],
+    }
+    back = target_clip(shapes, {"mien": {"targets": rows}})
+    assert back is not None and back.channels == ("mouthSmileLeft", "mouthSmileRight", "jawOpen")
+    np.testing.assert_allclose(back.values, [[0.2, 0.2, 0.3], [0.4, 0.4, 0.4]])  # a shared shape: both halves
+    nan_rows = {"jawOpen": [["Jaw.Open", float("nan"), ""]]}
+    too_many = {f"t{i}": [["smile", 1.0, ""]] for i in range(MAX_EXTRAS_ROWS + 1)}
+    for extras in (None, [], {"mien": []}, {"mien": {"targets": []}}, {"mien": {"targets": {"x": 3}}},
+                   {"mien": {"targets": nan_rows}}, {"mien": {"targets": too_many}},
+                   {"mien": {"targets": {"jawOpen": [["elsewhere", 1.0, ""]]}}}):  # fmt: skip
+        assert target_clip(shapes, extras) is None, extras
+    quaternions = np.array([[0.0, 0.0, 0.0, 1.0], [0.0, np.sin(0.25), 0.0, np.cos(0.25)]])
+    identity = {"mien": {"head": {"node": 3, "left": np.eye(3).tolist(), "right": np.eye(3).tolist()}}}
+    turns = head_turns(3, quaternions, identity)
+    assert turns is not None and turns.shape == (2, 3, 3)
+    np.testing.assert_allclose(turns[1] @ [0.0, 0.0, 1.0], [np.sin(0.5), 0.0, np.cos(0.5)], atol=1e-12)
+    assert head_turns(4, quaternions, identity) is None  # another node
+    bad = {"mien": {"head": {"node": 3, "left": [[float("nan")] * 3] * 3, "right": np.eye(3).tolist()}}}
+    assert head_turns(3, quaternions, bad) is None and head_turns(3, quaternions, {"mien": 1}) is None

@@ -64,6 +64,10 @@ FILE_FORMATS: tuple[str, ...] = ("gltf", "vrm0", "vrm1")
 ANIMATION_NAME = "mien"
 """Name of the animation added to the file."""
 
+MAX_EXTRAS_ROWS = 4096
+"""Most target -> shape rows :func:`target_clip` trusts in a file's ``extras`` (mien writes one or two per
+target: about 100 for a VALID avatar)."""
+
 _FLOAT = 5126
 _MIME = {".png": "image/png", ".jpg": "image/jpeg", ".jpeg": "image/jpeg", ".webp": "image/webp", ".ktx2": "image/ktx2"}
 _TOKEN = re.compile(r"[A-Z]?[a-z]+|[A-Z]+(?![a-z])|\d+")
@@ -159,22 +163,34 @@ def target_clip(shapes: Clip, extras: Any) -> Clip | None:
     The shape weights are linear in the target weights (:func:`~mien.exchange.file_shapes.shape_weights`), so
     the targets are their least-squares solution (the smallest one where targets share a shape), over the
     shapes ``shapes`` holds (a file's shapes on other meshes, such as the teeth, are not needed). Targets with
-    no shape in ``shapes`` are left out.
+    no shape in ``shapes`` are left out. Rows that are malformed, not finite or more than
+    :data:`MAX_EXTRAS_ROWS` are not trusted: the file's own shapes are read as they are.
     """
-    table = extras.get("mien", {}).get("targets") if isinstance(extras, dict) else None
+    table = _mien_extras(extras).get("targets")
     if not isinstance(table, dict) or not table:
         return None
+    present_names = set(shapes.channels)
     try:
-        rows: SourceRows = {str(t): tuple((str(s), float(w), str(side)) for s, w, side in r) for t, r in table.items()}
+        rows: SourceRows = {
+            str(target): tuple((str(shape), float(weight), str(side)) for shape, weight, side in table_rows)
+            for target, table_rows in table.items()
+        }
     except (TypeError, ValueError):
+        return None
+    if sum(len(r) for r in rows.values()) > MAX_EXTRAS_ROWS or not all(
+        math.isfinite(weight) for r in rows.values() for _shape, weight, _side in r
+    ):
+        return None
+    rows = {target: r for target, r in rows.items() if any(shape in present_names for shape, _w, _s in r)}
+    if not rows:
         return None
     targets = tuple(rows)
     unit = shape_weights(np.eye(len(targets), dtype=np.float32), targets, rows)  # shape -> its column of M
     present = [name for name in shapes.channels if name in unit]
-    if not present:
-        return None
     matrix = np.stack([unit[name] for name in present]).astype(np.float64)  # (shapes, targets)
     used = np.flatnonzero(np.abs(matrix).sum(axis=0) > 0)
+    if used.size == 0:
+        return None
     values = np.stack([shapes.channel(name) for name in present], axis=1)
     solved = values @ np.linalg.pinv(matrix[:, used]).T
     poses = [name for name in shapes.channels if name in POSE_CHANNELS]
@@ -186,18 +202,26 @@ def head_turns(node: int, quaternions: np.ndarray, extras: Any) -> np.ndarray | 
     """(n, 3, 3) head turns in mien's frame (:mod:`mien.rig.pose`) of node ``node``'s animated (n, 4) local
     rotations (x, y, z, w), when :func:`user_file_bytes` wrote them for the head and left its rest frames in the
     animation's ``extras``; None otherwise."""
-    head = extras.get("mien", {}).get("head") if isinstance(extras, dict) else None
+    head = _mien_extras(extras).get("head")
     if not isinstance(head, dict) or head.get("node") != node:
         return None
     try:
         left, right = np.asarray(head["left"], np.float64), np.asarray(head["right"], np.float64)
     except (KeyError, TypeError, ValueError):
         return None
-    if left.shape != (3, 3) or right.shape != (3, 3):
+    if left.shape != (3, 3) or right.shape != (3, 3) or not (np.isfinite(left).all() and np.isfinite(right).all()):
         return None
-    local = np.stack([_quaternion_matrix(q) for q in np.asarray(quaternions, np.float64)])
-    turns: np.ndarray = left.T @ local @ right.T  # both are rotations: their transposes undo them
+    q = np.asarray(quaternions, np.float64)
+    if q.ndim != 2 or q.shape[1] != 4:
+        return None
+    turns: np.ndarray = left.T @ _quaternion_matrix(q) @ right.T  # both are rotations: their transposes undo them
     return turns
+
+
+def _mien_extras(extras: Any) -> dict[str, Any]:
+    """The ``mien`` object of an animation's ``extras`` (empty when there is none, or it is not an object)."""
+    found = extras.get("mien") if isinstance(extras, dict) else None
+    return found if isinstance(found, dict) else {}
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -437,14 +461,15 @@ def _local(node: dict[str, Any]) -> np.ndarray:
 
 
 def _quaternion_matrix(q: Any) -> np.ndarray:
-    x, y, z, w = (float(v) for v in q)
-    norm = math.sqrt(x * x + y * y + z * z + w * w) or 1.0
-    x, y, z, w = x / norm, y / norm, z / norm, w / norm
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-    ])  # fmt: skip
+    """(..., 3, 3) rotation matrices of (..., 4) quaternions (x, y, z, w), normalised first."""
+    q = np.asarray(q, np.float64)
+    norm = np.linalg.norm(q, axis=-1, keepdims=True)
+    x, y, z, w = np.moveaxis(q / np.where(norm > 0, norm, 1.0), -1, 0)
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
+        np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
+        np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1),
+    ], -2)  # fmt: skip
 
 
 def _rotation_part(m: np.ndarray) -> np.ndarray:
