@@ -104,3 +104,42 @@ def test_named_heads_come_as_they_are() -> None:
     builtin = load_head("builtin")
     assert builtin.shape_gains == {} and not isinstance(builtin, FileRig)
     assert load_head("builtin:b").name == open_head("builtin:b").name
+
+
+def _aligned(rig: FileRig, native: object) -> tuple[object, np.ndarray]:
+    """A k-d tree of ``native``'s vertices and the shift that puts ``rig``'s vertices on them (the two loaders
+    place the origin a fraction of a millimetre apart)."""
+    spatial = pytest.importorskip("scipy.spatial", reason="scipy not installed (au extra)")
+    points = native.neutral.astype(np.float64)  # type: ignore[attr-defined]
+    tree = spatial.cKDTree(points)
+    mine = rig.neutral.astype(np.float64)
+    shift = np.zeros(3)
+    for _ in range(3):
+        _, nearest = tree.query(mine - shift)
+        shift = shift + np.median(mine - shift - points[nearest], axis=0)
+    return tree, shift
+
+
+def test_blender_icts_eye_shells_and_mouth_are_found_where_icts_own_regions_are(ict_glb: Path, ict) -> None:  # type: ignore[no-untyped-def]
+    """The file has one mesh and no part names: the see-through parts round the eyes and the inside of the mouth
+    are found by shape alone, and they are ICT's own (eye occlusion, tear line, eyelashes; teeth, gums and tongue;
+    the socket and the inner lips)."""
+    native, _ = ict
+    rig = load_head(str(ict_glb))
+    tree, shift = _aligned(rig, native)
+
+    def share_in(region: str, names: tuple[str, ...]) -> float:
+        distance, nearest = tree.query(rig.neutral[rig.regions[region]].astype(np.float64) - shift)
+        assert np.median(distance) < 1e-5  # the same vertices
+        wanted = np.zeros(native.n_vertices, bool)
+        for name in names:
+            wanted[np.asarray(native.regions[name], np.int64)] = True
+        return float(wanted[nearest].mean())
+
+    see_through = ("eye_occlusion_L", "eye_occlusion_R", "lacrimal_fluid_L", "lacrimal_fluid_R", "eye_blend_L",
+                   "eye_blend_R", "eyelashes_L", "eyelashes_R")  # fmt: skip
+    for side in ("L", "R"):
+        assert len(rig.regions[f"eye_shell_{side}"]) > 500 and share_in(f"eye_shell_{side}", see_through) > 0.95
+    assert share_in("teeth", ("teeth",)) > 0.99 and len(rig.regions["teeth"]) > 0.8 * len(native.regions["teeth"])
+    assert share_in("gums_tongue", ("gums_tongue",)) > 0.99
+    assert share_in("mouth_socket", ("mouth_socket", "lips")) > 0.95

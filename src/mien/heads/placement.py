@@ -66,11 +66,12 @@ def place_rig(rig: Rig, found: Instrumentation, name: str | None = None) -> Rig:
     )
     regions = dict(rig.regions)
     regions.setdefault("head", np.arange(rig.n_vertices, dtype=np.int32))
+    neutral = place(vertices)
     down, back = NECK_BELOW_EYES_M
     return replace(
         rig,
         name=name or rig.name,
-        neutral=place(vertices),
+        neutral=neutral,
         targets=targets,
         landmarks=found.ibug68_vertices,
         regions=regions,

@@ -20,6 +20,7 @@ from mien.errors import InvalidValueError
 from mien.fileio.hashing import file_sha256, key_sha256
 from mien.heads.amplitude import calibrate_amplitudes
 from mien.heads.instrument import Instrumentation, instrument_cached
+from mien.heads.mouth import mouth_regions
 from mien.heads.placement import place_rig
 from mien.render.camera import Camera
 from mien.render.clip_render import FrameRenderer, make_renderer
@@ -45,7 +46,8 @@ def instrument_head(
     rig: FileRig, landmarker_model: str | os.PathLike[str] | None = None
 ) -> tuple[Rig, Instrumentation]:
     """``rig`` (as its file was read) with the landmarks, axes and pivots its instrumenting found, and what it
-    found. The landmarks are looked for on the head's own textured render (brows, eyes and lips as drawn)."""
+    found. The landmarks are looked for on the head's own textured render (brows, eyes and lips as drawn); the
+    inside of the mouth is then found behind the lips (:func:`mien.heads.mouth.mouth_regions`)."""
     if rig.info is None:
         raise InvalidValueError("head", rig.name, "a head read from a file (mien.rig.files.load_head_file)")
 
@@ -58,8 +60,11 @@ def instrument_head(
     )  # fmt: skip
     if found.unit != "m" or found.up != (0.0, 1.0, 0.0) or found.forward != (0.0, 0.0, 1.0):
         # the reader could not tell the file's axes or unit (no eyes it could name): the face itself tells them
-        return place_rig(rig, found), found
-    return replace(rig, landmarks=found.ibug68_vertices), found
+        placed = place_rig(rig, found)
+    else:
+        placed = replace(rig, landmarks=found.ibug68_vertices)
+    mouth = mouth_regions(placed.neutral, placed.faces, placed.landmarks, placed.regions)
+    return (replace(placed, regions={**placed.regions, **mouth}) if mouth else placed), found
 
 
 def load_head(

@@ -63,8 +63,11 @@ HIDDEN_REGIONS = (
     "eye_blend_R",
     "eyelashes_L",
     "eyelashes_R",
+    "eye_shell_L",
+    "eye_shell_R",
 )
-"""Regions not drawn: see-through helper geometry, and ICT's eyelash cards (alpha-textured in the
+"""Regions not drawn: see-through helper geometry (ICT's named parts; a head file's eye shells, found by
+:mod:`mien.rig.files.head`), and ICT's eyelash cards (alpha-textured in the
 original; drawn opaque they read as thick dark bands, so the lash line is painted on the lid margin)."""
 
 

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mien.render.cavity import INTERIOR_REGIONS
 from mien.rig.model import Rig
 from mien.rig.polygon import inside_polygon
 
@@ -287,6 +288,9 @@ def _paint(rig: Rig, seed: int) -> FacePaint | None:
         ids = np.asarray(paintable, np.int64)
         jaw_depth = float(min(points[0, 2], points[16, 2]))
         texcoords[ids, 2] = _smoothstep(jaw_depth, jaw_depth + _PAINT_DEPTH_RAMP_M, rig.neutral[ids, 2])
+    for name in INTERIOR_REGIONS:  # a head file's "skin" holds its mouth socket: paint stays on the lips' face
+        if name in rig.regions:
+            texcoords[np.asarray(rig.regions[name], np.int64), 2] = 0.0
     # Transparent border texels: clamping outside the canvas samples nothing.
     canvas.rgba[[0, -1]] = 0.0
     canvas.rgba[:, [0, -1]] = 0.0

@@ -23,6 +23,7 @@ import math
 import os
 import re
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -226,6 +227,44 @@ def _eyeball_parts(positions: np.ndarray, triangles: np.ndarray) -> tuple[np.nda
     if centres[0][0] < centres[1][0]:
         centres, ids_a, ids_b = centres[::-1], ids_b, ids_a
     return np.stack(centres), [np.sort(ids_a), np.sort(ids_b)]
+
+
+EYE_SHELL_REACH = 2.2
+"""A part is an eye shell when every vertex lies within this many eyeball radii of one eye centre."""
+EYE_SHELL_MAX_SHARE = 0.05
+"""... and it holds at most this share of the head's vertices (the skin is one large part)."""
+
+
+def _eye_shells(
+    positions: np.ndarray, faces: np.ndarray, centres: np.ndarray, eye_ids: Sequence[np.ndarray]
+) -> dict[str, np.ndarray]:
+    """``{"eye_shell_L": ids, "eye_shell_R": ids}``: small parts hugging an eyeball that are not the eyeball.
+
+    Heads sculpted for real-time engines wrap each eye in see-through geometry (ICT's and Character Creator's
+    eye occlusion and tear line, MetaHuman's eye shell) that their engine draws transparent or as a shadow. In
+    a file exported without those materials they are opaque skin-coloured shells over the eyes; these regions
+    let the untextured renderer leave them out (:data:`mien.render.appearance.HIDDEN_REGIONS`). Empty without
+    eyeball vertices.
+    """
+    if any(len(ids) == 0 for ids in eye_ids):
+        return {}
+    labels = vertex_components(len(positions), faces)
+    eyeball = np.zeros(len(positions), bool)
+    for ids in eye_ids:
+        eyeball[ids] = True
+    radius = [float(np.median(np.linalg.norm(positions[ids] - centres[k], axis=1))) for k, ids in enumerate(eye_ids)]
+    parts, sizes = np.unique(labels, return_counts=True)
+    out: dict[str, list[np.ndarray]] = {"eye_shell_L": [], "eye_shell_R": []}
+    for label, size in zip(parts, sizes, strict=True):
+        if size > EYE_SHELL_MAX_SHARE * len(positions):
+            continue
+        ids = np.flatnonzero(labels == label)
+        if eyeball[ids].any():
+            continue
+        for k, side in enumerate(("L", "R")):
+            if np.linalg.norm(positions[ids] - centres[k], axis=1).max() <= EYE_SHELL_REACH * radius[k]:
+                out[f"eye_shell_{side}"].append(ids)
+    return {name: np.concatenate(found).astype(np.int32) for name, found in out.items() if found}
 
 
 def _weld(part: _Part) -> tuple[_Part, np.ndarray]:
@@ -665,6 +704,7 @@ def load_head_file(
                   if i not in eye_meshes.values() and "teeth" not in p.name.lower()]  # fmt: skip
     if skin_parts:
         regions["skin"] = np.concatenate(skin_parts).astype(np.int32)
+    regions.update(_eye_shells(neutral_m, faces, eyes_m, eye_ids))
 
     materials = tuple(
         PrimitiveMaterial(
