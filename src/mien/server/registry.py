@@ -253,10 +253,10 @@ class Registry:
                 entry.events.append(message)
         return entry
 
-    def reject(self, error: MessageRejected) -> None:
-        """Count and (rate-limited) log a dropped message."""
+    def reject(self, error: MessageRejected, cause: BaseException | None = None) -> None:
+        """Count and (rate-limited) log a dropped message (with ``cause``'s traceback: a bug's)."""
         self.counters.rejections[error.reason.value] += 1
-        self._log.warn(error.reason.value, error.detail)
+        self._log.warn(error.reason.value, error.detail, cause)
 
     def _apply_states(self, states: list[tuple[Entry, Message]]) -> None:
         """Write the full AU states of a tick in one go: each message's targets (AUs not named: 0) and Speed
@@ -362,8 +362,8 @@ class Registry:
         except MienError as exc:
             self.reject(MessageRejected(Rejection.ENGINE_ERROR, f"{entry.spec.id}: {exc}"))
         except Exception as exc:  # a bug must cost one message, not the tick of every character
-            log.exception("applying a message to %s failed", entry.spec.id)
-            self.reject(MessageRejected(Rejection.INTERNAL_ERROR, f"{entry.spec.id}: {type(exc).__name__}: {exc}"))
+            detail = f"{entry.spec.id}: {type(exc).__name__}: {exc}"
+            self.reject(MessageRejected(Rejection.INTERNAL_ERROR, detail), exc)  # one traceback per 5 s, not a flood
 
     def step(self, t_s: float) -> np.ndarray:
         """Apply queued commands and step every character to ``t_s``; returns the (n_rows, 62) frames.

@@ -202,8 +202,7 @@ class Hub:
             except MessageRejected as exc:
                 self.registry.reject(exc)
                 continue
-            except Exception as exc:  # a bug must cost one message, not the connection
-                log.exception("WebSocket command failed")
-                self.registry.reject(MessageRejected(Rejection.INTERNAL_ERROR, f"{type(exc).__name__}: {exc}"))
+            except Exception as exc:  # a bug must cost one message, not the connection (logged rate-limited)
+                self.registry.reject(MessageRejected(Rejection.INTERNAL_ERROR, f"{type(exc).__name__}: {exc}"), exc)
                 continue
             counters.ws_commands_accepted += 1
