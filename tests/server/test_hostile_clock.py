@@ -79,7 +79,8 @@ def test_create_with_a_seed_past_uint64_is_a_400_and_the_clock_keeps_moving(live
     assert httpx.post(f"{url}/api/characters/a/aus", json={"aus": {"AU12": 4}, "speed": 1}).status_code == 202
     wait_until(lambda: httpx.get(f"{url}/api/characters/a").json()["aus"]["AU12L"] == 4.0, what="a smiles")
     health = wait_until(lambda: (h := httpx.get(f"{url}/api/health").json())["ticks"] > ticks + 30 and h)
-    assert health["tick_errors"] == 0 and health["step_failures"] == 0 and health["status"] == "ok"
+    assert health["tick_errors"] == 0 and health["step_failures"] == 0 and not health["quarantined"]
+    assert "tick_errors" not in health["degraded"]  # ("late_ticks" is the machine's business)
     # the largest seed is a character like any other
     response = httpx.post(f"{url}/api/characters", json={"id": "top", "head": "builtin", "seed": 2**64 - 1})
     assert response.status_code == 201 and response.json()["seed"] == 2**64 - 1
@@ -128,7 +129,7 @@ def test_health_is_degraded_while_ticks_fail(live, wait_until, caplog) -> None:
         raise RuntimeError("listener exploded")
 
     url = live.base_url
-    assert httpx.get(f"{url}/api/health").json()["status"] == "ok"
+    assert "tick_errors" not in httpx.get(f"{url}/api/health").json()["degraded"]
     with caplog.at_level(logging.WARNING, logger="mien.server"):
         live.call(live.server.clock.listeners.append, explode)
         wait_until(lambda: httpx.get(f"{url}/api/health").json()["tick_errors"] >= 60, what="a second of failures")
@@ -140,10 +141,10 @@ def test_health_is_degraded_while_ticks_fail(live, wait_until, caplog) -> None:
 
 def test_health_is_degraded_while_ticks_run_late(live) -> None:
     url = live.base_url
-    assert httpx.get(f"{url}/api/health").json()["degraded"] == []
     live.call(time.sleep, 0.5)  # the loop stalls half a second: about 30 ticks skipped
     health = httpx.get(f"{url}/api/health").json()
-    assert health["status"] == "degraded" and health["degraded"] == ["late_ticks"]
+    assert health["status"] == "degraded" and "late_ticks" in health["degraded"]
+    assert "tick_errors" not in health["degraded"] and not health["quarantined"]
     assert health["skipped_ticks"] >= 20
 
 

@@ -62,7 +62,7 @@ def test_never_reading_clients_past_the_cap_cost_the_clock_nothing(server_factor
                 wait_until(lambda: httpx.get(health).json()["viewers_refused"] == 38, what="38 refusals counted")
                 body = httpx.get(health).json()
                 assert body["viewers"] == 3 and all(b" 101 " in head for _, head in clients)
-                assert body["tick_errors"] == 0 and body["status"] == "ok"
+                assert body["tick_errors"] == 0 and "tick_errors" not in body["degraded"]
                 start = good.recv_frame().tick
                 assert good.recv_frame().tick > start  # the good viewer is still served
             finally:
