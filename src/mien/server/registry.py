@@ -394,7 +394,7 @@ class Registry:
             except Exception:
                 continue
             self.batch = trial
-            self.quarantine(entry.spec.id, f"stepping it failed: {why}")
+            self.quarantine(entry.spec.id, f"stepping it failed: {why}", free_row=False)  # freed in the copy
             return frames
         return self._rebuild(t_s, why)
 
