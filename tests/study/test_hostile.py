@@ -260,13 +260,19 @@ def test_default_head_installed_then_removed(tmp_path: Path, ict_dir: Path, monk
     assert [e["sha256"] for e in without.manifest["stimuli"]] != [e["sha256"] for e in with_ict.manifest["stimuli"]]
 
 
-def test_a_manifest_of_another_design_version_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_a_manifest_of_another_design_version_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from mien.study import runner
+
+    served: list[object] = []
+    monkeypatch.setattr(runner, "serve", lambda app, sock: served.append(app))  # never serve in a test
     path = tmp_path / "design.toml"
     path.write_text(DESIGN.replace('views = ["frontal", "lateral"]', 'views = ["frontal"]'))
     make_stimuli(load_design(path), progress=False)
     path.write_text(path.read_text().replace('"OK-1"', '"OK-2"'))  # edited after the stimuli were made
     serve = ["study", "serve", str(path), "--db", str(tmp_path / "db.sqlite"), "--http-port", "0"]
-    assert main(serve) == 2
+    assert main(serve) == 2 and served == []  # before: served the stale stimuli
     err = capsys.readouterr().err
     assert f"{tmp_path / 'stimuli' / 'manifest.json'}: design_sha256" in err
     assert load_design(path).sha256 in err and f"re-run `mien study stimuli {path}`" in err
