@@ -187,3 +187,23 @@ def test_a_laugh_without_its_extra_is_a_counted_rejection_in_health(live, au_val
         )
     health = httpx.get(f"{live.base_url}/api/health").json()
     assert health["datagrams_accepted"] == 2 and health["datagrams_received"] == 3
+
+
+def test_a_bug_hit_by_every_datagram_logs_once_per_interval(live, wait_until, monkeypatch, caplog) -> None:
+    """A fault in handling (a bug, simulated) costs each datagram a counted rejection and the log one line per
+    5 s, not one traceback per datagram (a flood would write megabytes a second)."""
+    import mien.server.udp as udp_module
+
+    def broken(data: bytes) -> object:
+        raise RuntimeError("simulated bug")
+
+    monkeypatch.setattr(udp_module, "parse_message", broken)
+    counters = live.server.registry.counters
+    before, rejected = counters.datagrams_received, counters.rejections["internal_error"]
+    with caplog.at_level("WARNING", logger="mien.server"), socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+        for _ in range(50):
+            sock.sendto(b'{"AU12": 1}', ("127.0.0.1", live.udp_port))
+        wait_until(lambda: counters.datagrams_received - before >= 50, what="50 datagrams read")
+    faults = [r for r in caplog.records if "datagram handling failed" in r.getMessage()]
+    assert len(faults) == 1 and faults[0].exc_info is not None and "simulated bug" in faults[0].getMessage()
+    assert counters.rejections["internal_error"] - rejected >= 50

@@ -9,6 +9,7 @@ import socket
 
 from mien.server.protocol import MAX_MESSAGE_BYTES, MessageRejected, Rejection, parse_message
 from mien.server.registry import Registry
+from mien.server.stats import RateLimitedLog
 
 __all__ = ["MAX_DATAGRAMS_PER_WAKEUP", "RECEIVE_BUFFER_BYTES", "OpenFacsEndpoint", "open_udp"]
 
@@ -31,6 +32,8 @@ class OpenFacsEndpoint:
         self.sock = sock
         """The bound, non-blocking socket."""
         self.counters = registry.counters
+        self._faults = RateLimitedLog(prefix="datagram handling failed")
+        """A bug hit by every datagram of a flood logs one line (and traceback) per interval, not one each."""
 
     def on_readable(self) -> None:
         """Read and handle the waiting datagrams (never raises)."""
@@ -53,7 +56,7 @@ class OpenFacsEndpoint:
                 registry.reject(exc)
                 continue
             except Exception as exc:  # a bug must cost one datagram, not the endpoint
-                log.exception("datagram handling failed")
+                self._faults.warn(type(exc).__name__, f"datagram from {addr}: {exc}", exc)
                 registry.reject(MessageRejected(Rejection.INTERNAL_ERROR, f"{type(exc).__name__}: {exc}"))
                 continue
             counters.datagrams_accepted += 1
