@@ -10,6 +10,7 @@
 * **Basis**: ``facs`` or ``feature_points``, spelled as in Python and TOML (:func:`basis_name`).
 * **Frame rate**: :data:`ANIMATION_FPS` for animation data, :data:`VIDEO_FPS` for video.
 * **Progress**: ``--quiet`` on every command that shows progress (:func:`add_quiet`).
+* **Access token**: ``--token``, ``--token-file FILE`` or ``$MIEN_TOKEN`` (:func:`add_token`).
 
 An old spelling keeps working until :data:`REMOVED_IN` (:func:`add_deprecated_alias`,
 :func:`add_deprecated_option`, ``add_output(positional=True)``): it is noted while parsing, and ``mien.cli``
@@ -22,7 +23,9 @@ defaults and run by :func:`finish`.
 from __future__ import annotations
 
 import argparse
+import os
 from collections.abc import Callable, Sequence
+from pathlib import Path
 from typing import Any
 
 __all__ = [
@@ -30,6 +33,7 @@ __all__ = [
     "BASES",
     "PENDING_DEPRECATIONS",
     "REMOVED_IN",
+    "TOKEN_ENV",
     "VIDEO_FPS",
     "add_deprecated_alias",
     "add_deprecated_option",
@@ -38,6 +42,7 @@ __all__ = [
     "add_landmarker",
     "add_output",
     "add_quiet",
+    "add_token",
     "basis_list",
     "basis_name",
     "deprecated",
@@ -312,3 +317,41 @@ def basis_list(text: str) -> str:
 def add_quiet(parser: argparse.ArgumentParser) -> None:
     """Add ``--quiet``: no progress bars (bars show only on a terminal anyway)."""
     parser.add_argument("--quiet", action="store_true", help="no progress bars")
+
+
+# ------------------------------------------------------------------------------------------------ secrets
+
+TOKEN_ENV = "MIEN_TOKEN"
+"""Environment variable that holds the live server's access token (``serve``, ``send``) when no option gives it."""
+
+
+def add_token(parser: argparse.ArgumentParser, *, help: str) -> None:
+    """Add ``--token TOKEN`` and ``--token-file FILE``; after parsing ``args.token`` is the access token from
+    ``--token`` (other users see it in ``ps``), else the file's content (surrounding whitespace removed), else
+    ``$MIEN_TOKEN`` (:data:`TOKEN_ENV`), else None. Both options at once, or a missing, unreadable or empty
+    file, is a usage error naming the file (never the token)."""
+    parser.add_argument(
+        "--token", help=f"{help}; visible to other users in `ps`: prefer --token-file FILE or ${TOKEN_ENV}"
+    )
+    parser.add_argument(
+        "--token-file", metavar="FILE", help=f"read the access token from FILE (as --token; else ${TOKEN_ENV})"
+    )
+
+    def take_token(args: argparse.Namespace) -> None:
+        if args.token_file is not None:
+            if args.token is not None:
+                parser.error("give the access token once: --token or --token-file, not both")
+            try:
+                token = Path(args.token_file).read_text(encoding="utf-8").strip()
+            except (OSError, UnicodeDecodeError) as error:
+                reason = getattr(error, "strerror", None) or type(error).__name__
+                parser.error(
+                    f"--token-file {args.token_file}: cannot be read ({reason}); give a file holding the token"
+                )
+            if not token:
+                parser.error(f"--token-file {args.token_file} is empty: write the token into it")
+            args.token = token
+        elif args.token is None:
+            args.token = os.environ.get(TOKEN_ENV) or None
+
+    parser.set_defaults(_finish_token=take_token)

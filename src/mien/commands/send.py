@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING, Any
 
-from mien.commands._vocabulary import add_deprecated_option
+from mien.commands._vocabulary import add_deprecated_option, add_token
 
 if TYPE_CHECKING:
     from mien.client import HttpClient
@@ -67,7 +67,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         setattr(args, new.lstrip("-").replace("-", "_"), port)
 
     parser.set_defaults(_finish_port=take_port)
-    parser.add_argument("--token", help="access token (--ws or --check to a server beyond loopback)")
+    add_token(parser, help="access token (--ws or --check to a server beyond loopback)")
     parser.set_defaults(handler=run)
 
 

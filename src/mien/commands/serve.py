@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import argparse
 
-from mien.commands._vocabulary import add_head
+from mien.commands._vocabulary import add_head, add_token
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -33,7 +33,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         metavar="N",
         help="WebSocket viewers served at once; more are refused with close code 1013 and counted (default 200)",
     )
-    parser.add_argument("--token", help="access token (default: none on loopback, generated beyond)")
+    add_token(parser, help="access token (default: none on loopback, generated beyond)")
     parser.add_argument(
         "--allow-origin",
         action="append",
