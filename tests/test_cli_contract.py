@@ -350,7 +350,8 @@ def test_closed_pipe_as_a_real_pipe() -> None:
     assert process.stdout is not None and process.stderr is not None
     assert process.stdout.readline().startswith(b"time_s")
     process.stdout.close()
-    err = process.stderr.read().decode()
+    with process.stderr:
+        err = process.stderr.read().decode()
     assert process.wait(timeout=60) == 2
     assert err == "mien emote: error: output pipe closed; files already written are kept\n"
 
