@@ -143,8 +143,9 @@ def create_app(design: "Design", manifest: dict[str, Any], stimuli_folder: str |
         plans[participant] = found
         return found
 
-    def status(rec: "ParticipantRecord") -> dict[str, Any]:
-        answered, shows = store.progress(study, rec.participant)
+    def status(rec: "ParticipantRecord", progress: tuple[set[str], dict[str, int]] | None = None) -> dict[str, Any]:
+        """The participant's progress for the page (``progress``: :meth:`Store.progress` already read)."""
+        answered, shows = store.progress(study, rec.participant) if progress is None else progress
         remaining = [k for k, s in enumerate(rec.sequence) if s not in answered]
         done = not remaining
         if done and rec.completed_at is None:
@@ -287,7 +288,7 @@ def create_app(design: "Design", manifest: dict[str, Any], stimuli_folder: str |
             label_positions,
             nr_shows,
         )
-        reply = {"stored": stored, **status(rec)}
+        reply = {"stored": stored, **status(rec, (answered | {request.stimulus}, shows))}  # no second read
         # time spent in this handler (validation + commit + progress read), for load tests and monitoring
         response.headers["Server-Timing"] = f"app;dur={(time.perf_counter() - start) * 1000:.2f}"
         return reply

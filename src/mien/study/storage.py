@@ -67,6 +67,11 @@ BUSY_TIMEOUT_S = 3.0
 included (``mien study serve --busy-timeout``)."""
 
 
+OUTAGE_PROBE_S = 0.5
+"""While SQLite is known to be locked, the one writer let through waits at most this long (seconds) to see
+whether the lock is gone; the others are refused at once (the page retries after ``Retry-After``)."""
+
+
 class StorageUnavailableError(MienError):
     """The database stayed locked or unreachable for the whole bound; nothing was stored."""
 
@@ -246,22 +251,26 @@ class Store:
         """A write transaction. SQLite: one writer at a time in this process (a lock, so threads queue in
         order instead of sleeping in SQLite's busy handler, which costs tens of ms per clash), waited for no
         longer than the operation's bound, and not at all while the database is known to be unavailable (the
-        writer already waiting is enough); SQLite's own busy timeout is set to what is left of the bound."""
+        writer already waiting is enough); SQLite's own busy timeout is set to what is left of the bound (in an
+        outage: :data:`OUTAGE_PROBE_S` at most)."""
         if self._write_lock is None:
             with self.engine.begin() as connection:
                 yield connection
             return
-        wait_s = 0.0 if self._unavailable_since is not None else self._remaining_s()
+        outage = self._unavailable_since is not None
+        wait_s = 0.0 if outage else self._remaining_s()
         if not self._write_lock.acquire(timeout=wait_s):
             raise _WriterQueueTimeout(wait_s)
         try:
             with self.engine.connect() as connection:
                 raw = connection.connection.dbapi_connection
                 assert raw is not None
-                raw.execute(f"PRAGMA busy_timeout={max(1, int(self._remaining_s() * 1000))}")
+                busy_s = min(self._remaining_s(), OUTAGE_PROBE_S) if outage else self._remaining_s()
+                raw.execute(f"PRAGMA busy_timeout={max(1, int(busy_s * 1000))}")
                 try:
                     with connection.begin():
                         yield connection
+                    self._local.wrote = True  # committed: the database takes writes again
                 finally:
                     raw.execute(f"PRAGMA busy_timeout={int(self.busy_timeout_s * 1000)}")
         finally:
@@ -313,6 +322,7 @@ class Store:
         outer = getattr(self._local, "deadline", None)
         self._local.deadline = started + self.busy_timeout_s if outer is None else outer
         delay = self.retry_s
+        self._local.wrote = False
         try:
             for attempt in range(1, RETRIES + 1):
                 try:
@@ -330,13 +340,17 @@ class Store:
                     )
                     if not transient:
                         raise
-                    if attempt == RETRIES or self._remaining_s() < delay:
+                    probe = self.is_sqlite and self._unavailable_since is not None  # one look during an outage
+                    if probe or attempt == RETRIES or self._remaining_s() < delay:
                         reason = str(getattr(error, "orig", error)).strip().splitlines()[0]
                         raise self._failed(reason, attempt, started) from None
                     time.sleep(delay)
                     delay *= 2
                 else:
-                    if self._unavailable_since is not None:
+                    # SQLite in WAL mode reads while another program holds the write lock: only a write ends
+                    # the outage there; on PostgreSQL any answer means the server is back
+                    recovered = not self.is_sqlite or getattr(self._local, "wrote", False)
+                    if self._unavailable_since is not None and recovered:
                         with self._health_lock:
                             self._unavailable_since, self._unavailable_error = None, ""
                     return result
