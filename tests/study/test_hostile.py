@@ -22,6 +22,7 @@ from mien.fileio.hashing import file_sha256
 from mien.study import stimuli as stimuli_module
 from mien.study.design import load_design
 from mien.study.export import answers_sha256
+from mien.study.protocol import questions
 from mien.study.runner import create_app
 from mien.study.stimuli import load_manifest, make_stimuli
 from mien.study.storage import StorageUnavailableError, Store, database_url
@@ -276,6 +277,21 @@ def test_a_manifest_of_another_design_version_is_refused(
     err = capsys.readouterr().err
     assert f"{tmp_path / 'stimuli' / 'manifest.json'}: design_sha256" in err
     assert load_design(path).sha256 in err and f"re-run `mien study stimuli {path}`" in err
+    # the report does not judge the stale stimuli either: it says why
+    manifest = load_manifest(tmp_path / "stimuli")
+    with Store(database_url(tmp_path / "db.sqlite", tmp_path)) as store:
+        store.register_stimuli("hostile", "broekens", manifest["stimuli"])
+        ids = [entry["id"] for entry in manifest["stimuli"]]
+        keys = [q.key for q in questions("broekens")]
+        for participant in ("P0", "P1"):
+            store.ensure_participant("hostile", participant, lambda _k: (ids, keys, [0]))
+            for position, stimulus in enumerate(ids):
+                store.record_answer("hostile", participant, stimulus, position, dict.fromkeys(keys, 2), {}, 1)
+    report = tmp_path / "report"
+    analyze = ["study", "analyze", str(path), "--db", str(tmp_path / "db.sqlite"), "-o", str(report), "--quiet"]
+    assert main(analyze) == 0
+    capsys.readouterr()
+    assert "design changed after these stimuli were made" in html.unescape((report / "report.html").read_text())
     assert main(["study", "stimuli", str(path), "--quiet"]) == 0
     assert "(0 made, 2 already done)" in capsys.readouterr().out  # nothing to render again: the text changed
     assert load_manifest(tmp_path / "stimuli")["design_sha256"] == load_design(path).sha256

@@ -156,6 +156,21 @@ def _checked_manifest(design: Design, folder: Path) -> dict:
     return manifest
 
 
+def _stale_manifest(design: Design, folder: Path) -> str | None:
+    """Why the stimuli in ``folder`` are not judged by the machine (their manifest is of another version of
+    the design), or None (judged, or the report says why not)."""
+    from mien.errors import MienError
+    from mien.study.stimuli import MANIFEST_NAME, check_design_sha256, load_manifest
+
+    if not (folder / MANIFEST_NAME).is_file():
+        return None
+    try:
+        check_design_sha256(load_manifest(folder, verify=False), design, folder)
+    except MienError as error:
+        return str(error)
+    return None
+
+
 def run_serve(args: argparse.Namespace) -> int:
     from mien.study.runner import create_app, listen, serve
 
@@ -202,10 +217,12 @@ def run_analyze(args: argparse.Namespace) -> int:
             )
         # hashed as read: the same SHA-256 as `mien study export` of these answers would have
         result = analyze(frame, factors, source=str(args.db or design.name))
+    stimuli = _stimuli_folder(args, design)
     path = write_report(
         result,
         args.output,
-        stimuli=_stimuli_folder(args, design),
+        machine=_stale_manifest(design, stimuli),
+        stimuli=stimuli,
         landmarker=args.landmarker,
         emotion_model=args.emotion_model,
         progress=not args.quiet,
