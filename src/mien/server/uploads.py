@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from mien.errors import InvalidValueError, MienError
+from mien.exchange import readable_suffixes, reader_for
 from mien.facs.clip import Clip
 from mien.fileio.limits import decode_limits
 
@@ -78,7 +79,6 @@ class UploadsBusy(MienError):
 
 def check_suffix(suffix: str) -> None:
     """Raise :class:`~mien.errors.InvalidValueError` unless some format reads ``suffix`` (``.csv``, ``.npz``...)."""
-    from mien.exchange import readable_suffixes
 
     if not suffix.startswith(".") or "/" in suffix or len(suffix) > 16:
         raise InvalidValueError("suffix", suffix, "a file suffix such as .json or .npz")
@@ -89,7 +89,6 @@ def check_suffix(suffix: str) -> None:
 
 def parse_clip(data: bytes, suffix: str) -> Clip:
     """The clip in ``data``, read by the reader of ``suffix`` (in this process; the server calls it in a worker)."""
-    from mien.exchange import reader_for
 
     check_suffix(suffix)
     try:
