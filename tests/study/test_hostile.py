@@ -15,6 +15,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from tests.study.studies import client_for, make_study
 
 from mien.cli import main
 from mien.errors import InvalidValueError
@@ -47,21 +48,7 @@ within = ["view"]
 
 @pytest.fixture(scope="module")
 def study(tmp_path_factory: pytest.TempPathFactory) -> tuple:
-    folder = tmp_path_factory.mktemp("hostile-study")
-    path = folder / "design.toml"
-    path.write_text(DESIGN)
-    design = load_design(path)
-    result = make_stimuli(design, progress=False)
-    return design, result.manifest, result.manifest_path.parent
-
-
-def client_for(study: tuple, db: Path, **store_options: float):  # type: ignore[no-untyped-def]
-    from fastapi.testclient import TestClient
-
-    design, manifest, folder = study
-    store = Store(database_url(db, db), **store_options)
-    store.register_stimuli(design.name, design.protocol, manifest["stimuli"])
-    return TestClient(create_app(design, manifest, folder, store)), store
+    return make_study(tmp_path_factory.mktemp("hostile-study"), DESIGN)
 
 
 def begin(client, participant: str) -> dict:  # type: ignore[no-untyped-def]

@@ -7,12 +7,11 @@ import sqlite3
 from pathlib import Path
 
 import pytest
+from tests.study.studies import client_for, make_study
 
 from mien.ports import free_port
 from mien.study.design import load_design
-from mien.study.runner import create_app
 from mien.study.stimuli import make_stimuli
-from mien.study.storage import Store, database_url
 
 DESIGN = """
 [study]
@@ -34,21 +33,7 @@ within = ["view"]
 
 @pytest.fixture(scope="module")
 def study(tmp_path_factory: pytest.TempPathFactory) -> tuple:
-    folder = tmp_path_factory.mktemp("api-study")
-    path = folder / "design.toml"
-    path.write_text(DESIGN)
-    design = load_design(path)
-    result = make_stimuli(design, progress=False)
-    return design, result.manifest, result.manifest_path.parent
-
-
-def client_for(study: tuple, db: Path, **store_options: float):  # type: ignore[no-untyped-def]
-    from fastapi.testclient import TestClient
-
-    design, manifest, folder = study
-    store = Store(database_url(db, db), **store_options)
-    store.register_stimuli(design.name, design.protocol, manifest["stimuli"])
-    return TestClient(create_app(design, manifest, folder, store)), store
+    return make_study(tmp_path_factory.mktemp("api-study"), DESIGN)
 
 
 def answers_for(session: dict, value: int = 3) -> dict[str, int]:
