@@ -231,8 +231,6 @@ def _eyeball_parts(positions: np.ndarray, triangles: np.ndarray) -> tuple[np.nda
 
 EYE_SHELL_REACH = 2.2
 """A part is an eye shell when every vertex lies within this many eyeball radii of one eye centre."""
-EYE_SHELL_MAX_SHARE = 0.05
-"""... and it holds at most this share of the head's vertices (the skin is one large part)."""
 
 
 def _eye_shells(
@@ -248,23 +246,31 @@ def _eye_shells(
     """
     if any(len(ids) == 0 for ids in eye_ids):
         return {}
-    labels = vertex_components(len(positions), faces)
-    eyeball = np.zeros(len(positions), bool)
+    n = len(positions)
+    near = np.zeros((2, n), bool)
+    for k, ids in enumerate(eye_ids):
+        distance = np.linalg.norm(positions - centres[k], axis=1)
+        near[k] = distance <= EYE_SHELL_REACH * float(np.median(distance[ids]))
+    close = near[0] | near[1]
+    inside = close[faces].all(axis=1)
+    spoiled = np.zeros(n, bool)  # in the eyeballs, or joined by a face to a vertex beyond reach
+    spoiled[faces[~inside].ravel()] = True
     for ids in eye_ids:
-        eyeball[ids] = True
-    radius = [float(np.median(np.linalg.norm(positions[ids] - centres[k], axis=1))) for k, ids in enumerate(eye_ids)]
-    parts, sizes = np.unique(labels, return_counts=True)
-    out: dict[str, list[np.ndarray]] = {"eye_shell_L": [], "eye_shell_R": []}
-    for label, size in zip(parts, sizes, strict=True):
-        if size > EYE_SHELL_MAX_SHARE * len(positions):
-            continue
-        ids = np.flatnonzero(labels == label)
-        if eyeball[ids].any():
-            continue
-        for k, side in enumerate(("L", "R")):
-            if np.linalg.norm(positions[ids] - centres[k], axis=1).max() <= EYE_SHELL_REACH * radius[k]:
-                out[f"eye_shell_{side}"].append(ids)
-    return {name: np.concatenate(found).astype(np.int32) for name, found in out.items() if found}
+        spoiled[ids] = True
+    candidates = np.flatnonzero(close)
+    index = np.full(n, -1, np.int64)
+    index[candidates] = np.arange(len(candidates))
+    labels = vertex_components(len(candidates), index[faces[inside]])  # only the parts round the eyes
+    _, part = np.unique(labels, return_inverse=True)
+    part = part.ravel()
+    bad = np.bincount(part, weights=spoiled[candidates]) > 0
+    out = {}
+    for k, side in enumerate(("L", "R")):
+        whole = np.bincount(part, weights=near[k][candidates]) == np.bincount(part)
+        keep = whole[part] & ~bad[part]
+        if keep.any():
+            out[f"eye_shell_{side}"] = candidates[keep].astype(np.int32)
+    return out
 
 
 def _weld(part: _Part) -> tuple[_Part, np.ndarray]:
