@@ -26,6 +26,15 @@ def make_server(**overrides: Any) -> ServerThread:
     return ServerThread(ServeConfig(**options))
 
 
+def assert_unharmed(server: ServerThread) -> None:
+    """The server answers its health check and no tick failed and no character was quarantined. Late ticks may
+    mark it ``degraded`` on a loaded shared machine: that is the clock's timing, not harm done by a request."""
+    import httpx
+
+    health = httpx.get(f"{server.base_url}/api/health").json()
+    assert not {"tick_errors", "quarantined"} & set(health["degraded"]), health
+
+
 @pytest.fixture
 def live() -> Iterator[ServerThread]:
     """A running server (60 Hz) with characters ``a`` and ``b``."""

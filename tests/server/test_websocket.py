@@ -11,6 +11,7 @@ import time
 import httpx
 import numpy as np
 import pytest
+from tests.server.conftest import assert_unharmed
 
 from mien.client import AsyncWebSocketClient, UdpClient, WebSocketClient
 from mien.errors import MienError
@@ -127,4 +128,4 @@ def test_garbage_on_the_sockets_is_dropped_and_counted(live, wait_until) -> None
     with socket.create_connection(("127.0.0.1", live.http_port), timeout=5.0) as raw:  # not HTTP at all
         raw.sendall(os.urandom(512) + b"\r\n\r\n")
         raw.recv(1024)
-    assert httpx.get(f"{live.base_url}/api/health").json()["status"] == "ok"
+    assert_unharmed(live)
