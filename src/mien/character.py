@@ -44,7 +44,7 @@ from mien.facs.idle import IDLE_COLUMNS, IdleBatch, IdleSettings
 from mien.facs.intensity import AUSpec
 from mien.small_matmul import matmul_rows
 
-__all__ = ["EXPRESSION_BASES", "Character", "CharacterBatch"]
+__all__ = ["EXPRESSION_BASES", "MAX_SEED", "Character", "CharacterBatch", "check_basis", "check_seed"]
 
 EXPRESSION_BASES = ("facs", "feature_points")
 """How emotions reach the face: EMFACS AU prototypes, or Broekens' feature-point vectors."""
@@ -76,7 +76,8 @@ MAX_SEED = 2**64 - 1
 """Largest seed: the counter-based random (:mod:`mien.facs.counter_random`) keys on a uint64."""
 
 
-def _check_seed(seed: object) -> int:
+def check_seed(seed: object) -> int:
+    """``seed`` as an int, or :class:`InvalidValueError` unless it is an integer 0..:data:`MAX_SEED`."""
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or not 0 <= int(seed) <= MAX_SEED:
         raise InvalidValueError("seed", seed, "an integer 0..2**64-1 (the uint64 key of the counter-based random)")
     return int(seed)
@@ -88,7 +89,8 @@ def _check_mode(emotion_mode: str) -> str:
     return emotion_mode
 
 
-def _check_basis(expression_basis: str) -> str:
+def check_basis(expression_basis: str) -> str:
+    """``expression_basis``, or :class:`InvalidValueError` unless it is one of :data:`EXPRESSION_BASES`."""
     if expression_basis not in EXPRESSION_BASES:
         raise InvalidValueError("expression_basis", expression_basis, f"one of {', '.join(EXPRESSION_BASES)}")
     return expression_basis
@@ -177,7 +179,7 @@ class CharacterBatch:
             seeds_array = np.atleast_1d(np.asarray(seeds))
         if seeds_array.size and (seeds_array.dtype.kind not in "iu" or seeds_array.min() < 0):
             raise InvalidValueError("seeds", seeds, "integer seeds 0..2**64-1")
-        basis = _check_basis(expression_basis)
+        basis = check_basis(expression_basis)
         mode = _check_mode(emotion_mode)
         settings = _idle_settings(idle)
         n = int(seeds_array.shape[0])
@@ -250,9 +252,9 @@ class CharacterBatch:
         Atomic: every argument is checked before any row changes, so a refused character leaves the batch as
         it was (a half-added row would fail every later :meth:`step`).
         """
-        value = _check_seed(seed)
+        value = check_seed(seed)
         settings = _idle_settings(idle)
-        basis = _check_basis(expression_basis)
+        basis = check_basis(expression_basis)
         mode = _check_mode(emotion_mode)
         if isinstance(idle, IdleSettings):
             IdleBatch(np.array([value], np.uint64), settings)  # a dry run on a scratch row: refused settings fail here
@@ -409,7 +411,7 @@ class CharacterBatch:
 
         ids = self._rows(rows)
         if seed is not None:
-            _check_seed(seed)
+            check_seed(seed)
         row_seeds = [int(self.seeds[row]) if seed is None else int(seed) for row in ids.tolist()]
         clips: dict[int, Clip] = {}
         for row_seed in row_seeds or [0 if seed is None else int(seed)]:
@@ -530,9 +532,9 @@ class Character:
         mood_gain: float = 1.0,
         tick_hz: float = 60.0,
     ) -> None:
-        self.seed = _check_seed(seed)
+        self.seed = check_seed(seed)
         """Seed of the idle behaviour (and default seed of laughter)."""
-        self.expression_basis = _check_basis(expression_basis)
+        self.expression_basis = check_basis(expression_basis)
         """``"facs"`` or ``"feature_points"``."""
         self.emotion_mode = _check_mode(emotion_mode)
         """``"categorical"`` or ``"pad"`` (:meth:`set_pad` only in ``"pad"``)."""

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from mien.character import EXPRESSION_BASES, MAX_SEED, CharacterBatch
+from mien.character import EXPRESSION_BASES, CharacterBatch, check_seed
 from mien.errors import InvalidValueError, MienError, MissingExtraError, UnknownNameError
 from mien.extras import EXTRA_OF
 from mien.facs.catalogue import FACE_CHANNELS
@@ -75,8 +75,7 @@ class CharacterSpec:
     def __post_init__(self) -> None:
         if not isinstance(self.id, str) or not _ID.match(self.id):
             raise InvalidValueError("id", self.id, "1-64 characters of A-Z a-z 0-9 _ . -")
-        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or not 0 <= self.seed <= MAX_SEED:
-            raise InvalidValueError("seed", self.seed, "an integer 0..2**64-1 (18446744073709551615)")
+        check_seed(self.seed)
         if not isinstance(self.idle, bool):
             raise InvalidValueError("idle", self.idle, "true or false")
         if self.expression_basis not in EXPRESSION_BASES:
