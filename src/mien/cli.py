@@ -13,6 +13,7 @@ from mien.commands import COMMAND_MODULES
 from mien.commands._checks import PENDING_OUTPUTS, prepare_outputs
 from mien.commands._vocabulary import PENDING_DEPRECATIONS, finish
 from mien.errors import MienError
+from mien.signals import termination_as_interrupt
 from mien.version import __version__
 
 __all__ = ["UsageError", "build_parser", "main"]
@@ -79,7 +80,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
     try:
         prepare_outputs()  # the missing output folders, made once every argument is known to be good
-        code = int(args.handler(args) or 0)
+        with termination_as_interrupt():  # SIGTERM / SIGHUP clean up as Ctrl-C does, in every command
+            code = int(args.handler(args) or 0)
         sys.stdout.flush()  # a reader that went away is met here, not in the interpreter's last flush
         return code
     except MienError as exc:

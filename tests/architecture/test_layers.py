@@ -16,7 +16,7 @@ SRC = Path(__file__).resolve().parents[2] / "src"
 
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("mien.version", "mien.errors", "mien.extras", "mien.paths", "mien.progress", "mien.ports", "mien.fileio",
-     "mien.small_matmul", "mien.htmlpage", "mien.stats"),
+     "mien.small_matmul", "mien.htmlpage", "mien.stats", "mien.signals"),
     ("mien.facs",),
     ("mien.affect",),
     ("mien.plot",),

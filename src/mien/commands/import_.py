@@ -40,14 +40,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run ``mien import``; SIGTERM and SIGHUP stop it as Ctrl-C does (no temporary file left behind)."""
-    from mien.render.video import termination_as_interrupt
-
-    with termination_as_interrupt():
-        return _run(args)
-
-
-def _run(args: argparse.Namespace) -> int:
     import warnings
 
     from mien.commands._checks import refuse_option

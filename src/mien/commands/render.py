@@ -191,14 +191,6 @@ def _laugh_clip(args: argparse.Namespace, laugh: str) -> tuple[Clip, np.ndarray 
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run ``mien render``; SIGTERM and SIGHUP stop it as Ctrl-C does (no temporary file left behind)."""
-    from mien.render.video import termination_as_interrupt
-
-    with termination_as_interrupt():
-        return _run(args)
-
-
-def _run(args: argparse.Namespace) -> int:
     import warnings
 
     from mien.commands._clips import refuse_foreign_channels

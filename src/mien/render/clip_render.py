@@ -24,10 +24,11 @@ from mien.render.face_paint import face_paint
 from mien.render.materials import textured_mesh_from_rig
 from mien.render.offscreen import DEFAULT_BACKGROUND, OffscreenRenderer
 from mien.render.textured import TexturedRenderer
-from mien.render.video import termination_as_interrupt, write_mp4, write_png
+from mien.render.video import write_mp4, write_png
 from mien.rig.deform import Deformer
 from mien.rig.model import Rig
 from mien.rig.pose import apply_pose
+from mien.signals import termination_as_interrupt
 
 __all__ = [
     "POSE_COLUMNS",
@@ -227,7 +228,7 @@ def render_clip(
     (even for MP4). ``poses`` (n_frames, 5) degrees: head yaw/pitch/roll, gaze yaw/pitch, or None.
     ``samples`` multisample anti-aliasing: off by default for clips (4x MSAA costs 2-5x per frame on
     llvmpipe); stills (:func:`render_still`) use 4. SIGTERM and SIGHUP stop it as Ctrl-C does
-    (:func:`~mien.render.video.termination_as_interrupt`): the frames so far are kept, no temporary file.
+    (:func:`~mien.signals.termination_as_interrupt`): the frames so far are kept, no temporary file.
     """
     out = Path(out_path)
     w = _check_weights(rig, weights, None)

@@ -4,8 +4,8 @@
 renders the next frame while ffmpeg encodes (two cores busy). The video is written to a temporary file next to
 it (:func:`mien.fileio.streams.temporary_path`) and renamed when complete; if the caller fails midway, the
 encoder is closed cleanly so the frames so far form a valid, shorter video kept as ``<name>.partial.mp4``,
-and the error propagates. :func:`termination_as_interrupt` makes SIGTERM and SIGHUP (a ``kill``, a closed
-terminal) end the writing the way Ctrl-C does, so they leave no temporary file behind either.
+and the error propagates. :func:`mien.signals.termination_as_interrupt` makes SIGTERM and SIGHUP (a ``kill``,
+a closed terminal) end the writing the way Ctrl-C does, so they leave no temporary file behind either.
 """
 
 from __future__ import annotations
@@ -13,11 +13,10 @@ from __future__ import annotations
 import contextlib
 import os
 import queue
-import signal
 import subprocess
 import tempfile
 import threading
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO
@@ -32,9 +31,7 @@ from mien.progress import progress as progress_bar
 __all__ = [
     "EncodedVideo",
     "Mp4Writer",
-    "Terminated",
     "read_video_info",
-    "termination_as_interrupt",
     "write_mp4",
     "write_png",
 ]
@@ -51,42 +48,6 @@ X264_PRESETS = (
     "veryslow",
 )
 """libx264 speed presets, fastest first."""
-
-
-class Terminated(KeyboardInterrupt):
-    """SIGTERM or SIGHUP arrived while :func:`termination_as_interrupt` was active (a ``KeyboardInterrupt``, so
-    every writer cleans up as for Ctrl-C)."""
-
-    def __init__(self, signal_number: int) -> None:
-        self.signal_number = signal_number
-        super().__init__(f"terminated by {signal.Signals(signal_number).name}")
-
-
-TERMINATING_SIGNALS: tuple[str, ...] = ("SIGTERM", "SIGHUP")
-"""Signals :func:`termination_as_interrupt` turns into :class:`Terminated` (those this platform has)."""
-
-
-@contextlib.contextmanager
-def termination_as_interrupt() -> Iterator[None]:
-    """Within the block, SIGTERM and SIGHUP raise :class:`Terminated` in the main thread instead of killing the
-    process at once, so ``with`` blocks and ``finally`` clauses run (an MP4 writer keeps ``.partial.mp4`` and
-    removes its temporary file). Only signals still at their default action are taken over, and only from the
-    main thread (elsewhere the block runs unchanged); the previous handlers come back on exit."""
-    taken: dict[int, object] = {}
-    if threading.current_thread() is threading.main_thread():
-        for name in TERMINATING_SIGNALS:
-            number = getattr(signal, name, None)
-            if number is not None and signal.getsignal(number) is signal.SIG_DFL:
-                taken[number] = signal.signal(number, _raise_terminated)
-    try:
-        yield
-    finally:
-        for number, previous in taken.items():
-            signal.signal(number, previous)  # type: ignore[arg-type]
-
-
-def _raise_terminated(signal_number: int, frame: object) -> None:
-    raise Terminated(signal_number)
 
 
 def _ffmpeg_exe() -> str:
