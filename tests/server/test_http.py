@@ -110,9 +110,10 @@ def test_clip_upload_plays_on_the_character(live, wait_until) -> None:
     data = buffer.getvalue()
     url = f"{live.base_url}/api/characters/b/clip"
     binary = {"content-type": "application/octet-stream"}  # the upload's one content type (docs/SERVER.md)
-    assert httpx.post(url, params={"suffix": ".json"}, content=data, headers=binary).status_code == 202
+    reply = httpx.post(url, params={"suffix": ".json"}, content=data, headers=binary, timeout=30.0)  # a worker reads it
+    assert reply.status_code == 202
     wait_until(lambda: httpx.get(f"{live.base_url}/api/characters/b").json()["aus"]["AU12L"] > 3.9, what="clip")
-    bad = httpx.post(url, params={"suffix": ".json"}, content=b"\x00\x01 not a clip", headers=binary)
+    bad = httpx.post(url, params={"suffix": ".json"}, content=b"\x00\x01 not a clip", headers=binary, timeout=30.0)
     assert bad.status_code == 400 and "clip" in bad.text
     assert httpx.post(url, params={"suffix": ".exe"}, content=data, headers=binary).status_code == 400
 
