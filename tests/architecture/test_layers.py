@@ -26,7 +26,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("mien.render",),
     ("mien.exchange",),
     ("mien.tracking",),
-    ("mien.learning", "mien.assets", "mien.heads"),
+    ("mien.learning", "mien.assets", "mien.heads", "mien.capture"),
     ("mien.validate",),
     ("mien.study",),
     ("mien.viewer",),
