@@ -6,7 +6,8 @@ of a crowd. Layers, added in this order into each (62,) face frame (see
 :data:`~mien.facs.catalogue.FACE_CHANNELS`):
 
 1. FACS: held AU targets with time-based dynamics and timed onset/apex/offset actions
-   (:class:`~mien.facs.dynamics.FacsBatch`).
+   (:class:`~mien.facs.dynamics.FacsBatch`), plus a person's performance where one drives the row (a held
+   (62,) face frame, :meth:`CharacterBatch.set_performance`: live capture, ``mien serve --capture``).
 2. Emotions (Broekens): ``emotion @ basis + shown_mood @ closed_mouth_basis``
    (:class:`~mien.affect.engine.EmotionBatch`, events, PAD states, moods). With ``expression_basis="facs"``
    the basis is the EMFACS prototypes (AU channels, scaled by :func:`~mien.affect.basis.saturate`); with
@@ -200,6 +201,7 @@ class CharacterBatch:
         self._has_features = bool(self._features.any())
         self._free: list[int] = []
         self._laughs: dict[int, list[_ActiveLaugh]] = {}
+        self._performance: dict[int, np.ndarray] = {}  # row -> held (62,) frame of a person's performance
         self._basis = facs_basis()
         self._mood_basis = facs_basis(closed_mouth=True)
         self._fp_basis = feature_point_basis()
@@ -292,6 +294,7 @@ class CharacterBatch:
         self.emotions.reset_rows(rows)
         self.idle.reset_rows(rows, np.array([0]), None, self.time_s)
         self._laughs.pop(index, None)
+        self._performance.pop(index, None)
         self._active[index] = False
         self._features[index] = False
         self._pad_mode[index] = False
@@ -429,6 +432,20 @@ class CharacterBatch:
         for row in ids.tolist():
             self._start_clip(row, face, start_s)
 
+    def set_performance(self, rows: RowIndex, frame: np.ndarray | None) -> None:
+        """Hold a person's (62,) face frame (FACE_CHANNELS: AUs 0..5, pose degrees) as a layer on ``rows`` until the
+        next call; ``None`` removes it. It adds to the FACS layer, so emotions, laughter and idle go on top."""
+        ids = self._rows(rows)
+        if frame is None:
+            for row in ids.tolist():
+                self._performance.pop(row, None)
+            return
+        values = np.array(frame, dtype=np.float64)
+        if values.shape != (_N,) or not np.isfinite(values).all():
+            raise InvalidValueError("frame", getattr(frame, "shape", frame), f"a finite ({_N},) face frame")
+        for row in ids.tolist():
+            self._performance[row] = values
+
     def _start_clip(self, row: int, clip: Clip, start_s: float | None) -> None:
         start = self.time_s if start_s is None else float(start_s)
         if not math.isfinite(start):
@@ -452,6 +469,8 @@ class CharacterBatch:
         frames = self._frames
         frames[:] = self.facs.advance(t)
         self._t_s = t
+        for row, performance in self._performance.items():
+            frames[row] += performance
         emotions = self.emotions
         emotions.advance(t)
         if not emotions.resting:
@@ -623,6 +642,10 @@ class Character:
     def play_clip(self, clip: Clip, *, start_s: float | None = None) -> None:
         """Add a face clip (channels ⊂ FACE_CHANNELS, e.g. a laugh or an imported performance) as a layer."""
         self.batch.play_clip(0, clip, start_s=start_s)
+
+    def set_performance(self, frame: np.ndarray | None) -> None:
+        """Hold a person's (62,) face frame as a layer under the others until the next call (``None``: remove it)."""
+        self.batch.set_performance(0, frame)
 
     # ------------------------------------------------------------------ output
 

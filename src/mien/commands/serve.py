@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import argparse
 
-from mien.commands._vocabulary import add_head, add_token
+from mien.commands._checks import input_file
+from mien.commands._vocabulary import add_head, add_landmarker, add_token
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -55,6 +56,21 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("--seed", type=int, default=0, help="seed of the first character (others: +1 each)")
     parser.add_argument("--no-idle", action="store_true", help="switch idle behaviour off")
+    parser.add_argument(
+        "--capture",
+        metavar="SOURCE",
+        help="a camera (/dev/video0, camera:0) or a video file played at its real rate: the first character's face "
+        "follows the person in it (emotions, laughter and idle still add on top; see docs/SERVER.md, Capture)",
+    )
+    parser.add_argument(
+        "--follow",
+        action="append",
+        default=[],
+        metavar="ID",
+        help="a character that follows --capture (repeatable: a second one mirrors the first; default: the first)",
+    )
+    parser.add_argument("--capture-loop", action="store_true", help="play a --capture video file in a loop")
+    add_landmarker(parser, type=input_file)
     parser.add_argument("--check", action="store_true", help="start, print the addresses, then stop (a smoke test)")
     parser.set_defaults(handler=run)
 
@@ -83,15 +99,29 @@ def run(args: argparse.Namespace) -> int:
 
     require("mien.server.app", "serve")  # a missing fastapi/uvicorn names mien[serve]
     from mien.server.app import LiveServer, ServeConfig, is_loopback
+    from mien.server.capture_source import CaptureConfig, CaptureSource
     from mien.server.registry import CharacterSpec
 
     ids = args.character or ["default"]
+    capture = None
+    if args.capture is None:
+        for option, given in (("--follow", args.follow), ("--capture-loop", args.capture_loop),
+                              ("--landmarker", args.landmarker)):  # fmt: skip
+            if given:
+                raise InvalidValueError(option, given, "--capture SOURCE as well (it applies to a capture source)")
+    else:
+        for character_id in args.follow:
+            if character_id not in ids:
+                raise InvalidValueError("--follow", character_id, f"one of the --character ids {ids}")
+        model = str(args.landmarker) if args.landmarker is not None else None
+        capture = CaptureConfig(args.capture, tuple(args.follow), loop=args.capture_loop, model=model)
+        CaptureSource(capture).check()  # a missing or busy camera, an unreadable video: exit 2 before serving
     specs = tuple(
         CharacterSpec(character_id, head=args.head, identity=args.identity, seed=args.seed + i, idle=not args.no_idle)
         for i, character_id in enumerate(ids)
     )
     config = ServeConfig(args.host, args.udp_port, args.http_port, args.tick_hz, args.token, specs)
-    config = dataclasses.replace(config, allow_origins=tuple(args.allow_origin))
+    config = dataclasses.replace(config, allow_origins=tuple(args.allow_origin), capture=capture)
     if args.max_viewers is not None:
         config = dataclasses.replace(config, max_viewers=args.max_viewers)
     logging.basicConfig(level=logging.WARNING, format="%(asctime)s %(name)s %(levelname)s: %(message)s")
@@ -131,6 +161,9 @@ def run(args: argparse.Namespace) -> int:
         print(f"mien serve: HTTP on http://{host}:{server.http_port}/{query} (OpenAPI: /openapi.json)", flush=True)
         print(f"mien serve: WebSocket frames on ws://{host}:{server.http_port}/ws{query}", flush=True)
         print(f"mien serve: characters {', '.join(ids)} at {args.tick_hz:g} Hz; Ctrl-C or SIGTERM stops", flush=True)
+        if capture is not None:
+            followers = ", ".join(capture.characters or ids[:1])
+            print(f"mien serve: {followers} follow {capture.source} (state: /api/capture)", flush=True)
         if not is_loopback(args.host):
             print(f"mien serve: WARNING: listening beyond loopback; access token: {server.token}", flush=True)
         try:

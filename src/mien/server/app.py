@@ -20,6 +20,7 @@ from typing import Any
 
 from mien.errors import InvalidValueError
 from mien.extras import require
+from mien.server.capture_source import CaptureConfig, CaptureSource
 from mien.server.guard import access_policy, is_loopback, origin_of
 from mien.server.registry import CharacterSpec, Registry
 from mien.server.scheduler import Clock
@@ -53,6 +54,8 @@ class ServeConfig:
     :mod:`mien.server.guard`."""
     max_viewers: int = DEFAULT_MAX_VIEWERS
     """WebSocket viewers served at once; more are refused (close code 1013) and counted."""
+    capture: CaptureConfig | None = None
+    """A camera or video file whose performer some characters follow (:mod:`mien.server.capture_source`)."""
 
     def __post_init__(self) -> None:
         for name in ("udp_port", "http_port"):
@@ -68,6 +71,10 @@ class ServeConfig:
             raise InvalidValueError("characters", ids, "distinct character ids")
         if isinstance(self.max_viewers, bool) or not isinstance(self.max_viewers, int) or self.max_viewers < 0:
             raise InvalidValueError("max_viewers", self.max_viewers, "a number of viewers >= 0")
+        if self.capture is not None:
+            for character_id in self.capture.characters:
+                if character_id not in ids:
+                    raise InvalidValueError("capture character", character_id, f"one of the characters {ids}")
 
 
 class LiveServer:
@@ -84,6 +91,11 @@ class LiveServer:
         self.hub = Hub(self.registry, config.max_viewers, config.tick_hz)
         """The WebSocket viewers."""
         self.clock.listeners.append(self.hub.on_tick)
+        self.capture = CaptureSource(config.capture) if config.capture is not None else None
+        """The capture source, or None."""
+        if self.capture is not None:
+            self.registry.capture = self.capture
+            self.clock.listeners.append(self.capture.on_tick)
         self.token: str | None = config.token
         """Access token for HTTP and WebSocket, or None."""
         if self.token is None and not is_loopback(config.host):
@@ -107,6 +119,11 @@ class LiveServer:
         for spec in self.config.characters:
             self.registry.add(spec)
         self.registry.warm_up()  # the first laugh is slow: not on the clock
+        if self.capture is not None and self.config.characters:
+            followers = self.capture.config.characters or (self.config.characters[0].id,)
+            for character_id in followers:
+                self.registry.follow(self.registry.get(character_id), True)
+            self.capture.start()
         host = self.config.host
         self._udp, self.udp_port = await open_udp(self.registry, host, self.config.udp_port)
         sock = socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET, socket.SOCK_STREAM)
@@ -142,7 +159,8 @@ class LiveServer:
 
     def health_state(self) -> dict[str, Any]:
         """What ``/api/health`` adds to the counters: ``status`` (``"ok"``, or ``"degraded"`` while ticks fail or
-        run late (:meth:`Clock.health <mien.server.scheduler.Clock.health>`) or a character is quarantined),
+        run late (:meth:`Clock.health <mien.server.scheduler.Clock.health>`), a character is quarantined or the
+        capture source failed),
         ``degraded`` (the reasons), ``quarantined`` (id -> why), ``datagrams_dropped_by_os`` (None where the system
         does not say), ``viewers_refused``, ``frames_thinned``, ``frame_stride``, ``max_viewers``,
         ``step_failures``."""
@@ -150,6 +168,8 @@ class LiveServer:
         quarantined = dict(self.registry.quarantined)
         if quarantined:
             reasons.append("quarantined")
+        if self.capture is not None and self.capture.state == "failed":
+            reasons.append("capture_failed")
         counters = self.registry.counters
         return {
             "status": "degraded" if reasons else "ok",
@@ -170,6 +190,8 @@ class LiveServer:
         if self._udp is not None:
             self._udp.close()
             self._udp = None
+        if self.capture is not None:
+            await asyncio.to_thread(self.capture.stop)
         if self._tasks:
             with contextlib.suppress(asyncio.TimeoutError):
                 await asyncio.wait_for(asyncio.shield(self._tasks[1]), 5.0)

@@ -43,7 +43,9 @@ class Health(BaseModel):
     """Server health and counters."""
 
     status: str = Field(description='"ok", or "degraded" while ticks fail or run late or a character is quarantined')
-    degraded: list[str] = Field(description="Why degraded: tick_errors, late_ticks, stalled, quarantined")
+    degraded: list[str] = Field(
+        description="Why degraded: tick_errors, late_ticks, stalled, quarantined, capture_failed"
+    )
     quarantined: dict[str, str] = Field(description="Characters taken out because stepping them failed: id -> why")
     step_failures: int = Field(description="Ticks whose step failed (a character was quarantined)")
     datagrams_dropped_by_os: int | None = Field(description="UDP datagrams the OS dropped (full queue; null: unknown)")
@@ -68,6 +70,45 @@ class Health(BaseModel):
     characters: int = Field(description="Number of characters")
     frames_sent: int = Field(description="WebSocket frames handed to viewers")
     frames_dropped: int = Field(description="Frames replaced before a slow viewer read them")
+    capture: str | None = Field(
+        None, description="State of the capture source (tracking, no_face, ended, failed...; null: none)"
+    )
+
+
+class CaptureTiming(BaseModel):
+    """One tracked frame of the capture source, on the server's ``time.monotonic()`` clock (seconds)."""
+
+    frame: int = Field(description="Number of the tracked frame")
+    arrival_s: float = Field(description="When the frame arrived (read from the camera, or its time came due)")
+    track_start_s: float = Field(description="When the tracker took it")
+    tracked_s: float = Field(description="When its face frame was ready")
+    tick: int | None = Field(description="First tick that showed it (null: not yet, or no character follows)")
+
+
+class CaptureStatus(BaseModel):
+    """The capture source (``mien serve --capture``)."""
+
+    source: str = Field(description="Camera device or video file")
+    kind: str = Field(description="camera or file")
+    loop: bool = Field(description="A video file starts again at its end")
+    state: str = Field(description="starting, tracking, no_face, ended, failed or stopped")
+    error: str | None = Field(description="Why it failed")
+    has_face: bool = Field(description="The newest tracked frame has a face")
+    followers: list[str] = Field(description="Characters that follow it")
+    frames_read: int
+    frames_tracked: int
+    frames_dropped: int = Field(description="Frames replaced by a newer one while the tracker was busy")
+    frames_without_face: int
+    frames_face_too_small: int = Field(description="Frames whose face was narrower than min_face_px (no face)")
+    tracking_ms: float | None = Field(description="Median tracking time of the recent frames, ms")
+    tracking_p99_ms: float | None = Field(description="99th percentile of the recent frames' tracking time, ms")
+    timings: list[CaptureTiming] = Field(description="The newest tracked frames' timings")
+
+
+class CaptureCommand(_Body):
+    """Follow the capture source or stop."""
+
+    follow: bool = Field(description="true: the character's face follows the performer; false: it stops")
 
 
 class CharacterCreate(_Body):
@@ -309,6 +350,7 @@ def create_app(server: RunningServer, access: AccessPolicy | None = None) -> Fas
             characters=len(registry.entries),
             frames_sent=c.frames_sent,
             frames_dropped=c.frames_dropped,
+            capture=registry.capture.state if registry.capture is not None else None,
         )
 
     @app.get("/api/characters", response_model=list[CharacterInfo], dependencies=api, responses=_ERRORS)
@@ -385,6 +427,21 @@ def create_app(server: RunningServer, access: AccessPolicy | None = None) -> Fas
         switches: dict[str, bool] = dict.fromkeys(idle_parts(), body.on) if body.on is not None else {}
         switches.update({part: on for part in idle_parts() if (on := getattr(body, part)) is not None})
         return queue(character_id, {"idle": switches})
+
+    @app.post("/api/characters/{character_id}/capture", response_model=Accepted, status_code=202,
+              dependencies=api, responses=_ERRORS)  # fmt: skip
+    async def send_capture(character_id: str, body: CaptureCommand) -> Accepted:
+        """Make the character follow the capture source (a second character mirrors the first) or stop."""
+        return queue(character_id, {"capture": body.follow})
+
+    @app.get("/api/capture", response_model=CaptureStatus, dependencies=api, responses=_ERRORS)
+    async def capture_status() -> CaptureStatus:
+        """The capture source: state, counters, tracking time and the newest frames' timings (404: none)."""
+        source = registry.capture
+        if source is None:
+            raise HTTPException(404, "this server has no capture source (mien serve --capture)")
+        followers = [entry.spec.id for entry in registry.entries.values() if entry.performance is source]
+        return CaptureStatus(**source.status(), followers=followers)
 
     @app.post("/api/characters/{character_id}/clip", response_model=Accepted, status_code=202, dependencies=api,
               responses={**_ERRORS, **_UPLOAD_ERRORS}, openapi_extra={"requestBody": {"required": True, "content": {

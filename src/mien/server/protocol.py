@@ -17,6 +17,7 @@ key                meaning
 ``pad``            ``[pleasure, arousal, dominance]``, each in -1..1
 ``laugh``          a laugh type (``"laughter"``), with ``intensity`` 0..5 (default 1)
 ``idle``           ``true``/``false`` (all idle behaviour on/off) or ``{"blink": false, "gaze": true, ...}``
+``capture``        ``true``/``false``: follow the server's capture source (``mien serve --capture``) or stop
 ``character``      the character id (default: the first character)
 ``watch``          WebSocket only: switch the stream to this character id
 =================  =====================================================================================
@@ -114,7 +115,8 @@ AU_CHANNELS: dict[str, tuple[int, ...]] = {
 """
 
 _EXTENSION_KEYS = frozenset(
-    {"Speed", "speeds", "tau_s", "play", "emotion", "intensity", "pad", "laugh", "idle", "character", "watch"}
+    {"Speed", "speeds", "tau_s", "play", "emotion", "intensity", "pad", "laugh", "idle", "capture"}
+    | {"character", "watch"}
 )
 _OPENFACS_FAST_KEYS = AU_KEYS | {"Speed", "character"}
 _NUMBER_TYPES = (int, float)  # JSON numbers; bool is excluded by the exact type test
@@ -134,6 +136,7 @@ class Rejection(enum.StrEnum):
     UNKNOWN_NAME = "unknown_name"
     UNKNOWN_CHARACTER = "unknown_character"
     MISSING_EXTRA = "missing_extra"
+    NO_CAPTURE = "no_capture"
     ENGINE_ERROR = "engine_error"
     INTERNAL_ERROR = "internal_error"
 
@@ -188,6 +191,8 @@ class Message:
     """(pleasure, arousal, dominance), each in -1..1."""
     idle: tuple[tuple[str, bool], ...] | None = None
     """Idle switches to change, ``((part, on), ...)`` over :func:`idle_parts` (``true``/``false``: all parts)."""
+    capture: bool | None = None
+    """Follow the server's capture source (True) or stop (False)."""
     character: str | None = None
     """Target character id; None = the default (first) character, or the one a WebSocket watches."""
     watch: str | None = None
@@ -213,6 +218,7 @@ class Message:
             or self.pad is not None
             or self.play is not None
             or self.idle is not None
+            or self.capture is not None
         )
 
 
@@ -396,6 +402,10 @@ def parse_message(data: bytes | str, max_bytes: int = MAX_MESSAGE_BYTES) -> Mess
             fields["play"] = _play(value)
         elif key == "idle":
             fields["idle"] = _idle(value)
+        elif key == "capture":
+            if not isinstance(value, bool):
+                raise MessageRejected(Rejection.WRONG_TYPE, f"capture={value!r} must be true or false"[:200])
+            fields["capture"] = value
         elif key in ("emotion", "laugh"):
             fields[key] = _name(key, value)
         elif key == "intensity":

@@ -104,6 +104,10 @@ class Entry:
     """:class:`~mien.facs.clip.Clip` objects to start playing at the next tick."""
     view: HeadView | None = None
     """How viewers show its head, and the weights its frames carry (:mod:`mien.server.head_view`)."""
+    performance: Any = None
+    """The live :class:`~mien.server.capture_source.CaptureSource` whose face it follows, or None."""
+    performance_seq: int = 0
+    """Number of the newest performance frame given to its row."""
 
 
 class Registry:
@@ -125,6 +129,9 @@ class Registry:
         rejected as ``missing_extra`` on arrival."""
         self.quarantined: dict[str, str] = {}
         """Characters taken out of the batch because stepping them failed: id -> why (until DELETEd)."""
+        self.capture: Any = None
+        """The server's :class:`~mien.server.capture_source.CaptureSource` (``mien serve --capture``), or None: what a
+        ``{"capture": true}`` message makes a character follow."""
         self.lock = threading.RLock()
         """Held by each tick and each change (add, remove, submit), so changes from any thread land between ticks."""
         self._rigs: dict[tuple[str, str | None, bool], tuple[Any, Any]] = {}
@@ -243,6 +250,8 @@ class Registry:
             raise MessageRejected(Rejection.UNKNOWN_CHARACTER, f"character={character_id!r} {detail}")
         if message.laugh is not None and "laugh" in self.missing:
             raise MessageRejected(Rejection.MISSING_EXTRA, f"laugh={message.laugh!r}: {self.missing['laugh']}")
+        if message.capture and self.capture is None:
+            raise MessageRejected(Rejection.NO_CAPTURE, "capture=true: this server has no capture source (--capture)")
         with self.lock:
             if message.aus is not None:
                 if entry.state is not None:
@@ -326,6 +335,17 @@ class Registry:
             self.batch.set_pad(row, *message.pad, start_s=t_s)
         if message.laugh is not None:
             self.batch.laugh(row, message.laugh, message.intensity, start_s=t_s, seed=seed)
+        if message.capture is not None:
+            self.follow(entry, message.capture)
+
+    def follow(self, entry: Entry, on: bool) -> None:
+        """Make ``entry`` follow the server's capture source (``on``), or drop its performance layer."""
+        if on and self.capture is None:
+            raise MessageRejected(Rejection.NO_CAPTURE, "capture=true: this server has no capture source (--capture)")
+        with self.lock:
+            entry.performance, entry.performance_seq = (self.capture if on else None), 0
+            if not on and entry.spec.id in self.entries:
+                self.batch.set_performance(entry.row, None)
 
     def apply_pending(self, t_s: float) -> None:
         """Apply every queued command at ``t_s``. Never raises: a message that fails costs that message only,
@@ -337,6 +357,8 @@ class Registry:
             if entry.state is not None:
                 states.append((entry, entry.state))
                 entry.state = None
+            if entry.performance is not None:
+                self._apply_performance(entry)
             if entry.events or entry.clips:
                 busy.append(entry)
         if states:
@@ -348,6 +370,14 @@ class Registry:
             while entry.clips:
                 clip = entry.clips.pop(0)
                 self._guarded(entry, False, partial(self.batch.play_clip, entry.row, clip, start_s=t_s))
+
+    def _apply_performance(self, entry: Entry) -> None:
+        """Give ``entry``'s row the newest frame of the performance it follows (a new one only: the batch holds it)."""
+        seq, frame = entry.performance.latest()
+        if seq == entry.performance_seq:
+            return
+        entry.performance_seq = seq
+        self._guarded(entry, False, partial(self.batch.set_performance, entry.row, frame))
 
     def _guarded(self, entry: Entry, laugh: bool, apply: Callable[[], object]) -> None:
         """``apply()``, turning any failure into a counted rejection of this one message."""
@@ -414,7 +444,7 @@ class Registry:
                 )
             except Exception as exc:
                 refused.append((entry.spec.id, f"re-adding it failed: {type(exc).__name__}: {exc}"))
-            entry.state, entry.clips = None, []
+            entry.state, entry.clips, entry.performance_seq = None, [], 0
             entry.events.clear()
         self.batch = batch
         for character_id, reason in refused:
