@@ -6,8 +6,37 @@ held then eased to neutral); :func:`capture_video` and :func:`capture_track` run
 video or track file (``mien capture``). Importing this package needs numpy only.
 """
 
+from mien.capture.offline import (
+    FACE_FOUND_CHANNEL,
+    ROUTES,
+    Capture,
+    capture_file,
+    capture_frames,
+    capture_track,
+    capture_video,
+    capture_weight_clip,
+    neutral_from_frames,
+    neutral_from_image,
+    strip_face_mask,
+)
 from mien.capture.settings import CaptureSettings
 from mien.capture.smoothing import OneEuroFilter
 from mien.capture.stream import CaptureStream, gaze_deg
 
-__all__ = ["CaptureSettings", "CaptureStream", "OneEuroFilter", "gaze_deg"]
+__all__ = [
+    "FACE_FOUND_CHANNEL",
+    "ROUTES",
+    "Capture",
+    "CaptureSettings",
+    "CaptureStream",
+    "OneEuroFilter",
+    "capture_file",
+    "capture_frames",
+    "capture_track",
+    "capture_video",
+    "capture_weight_clip",
+    "gaze_deg",
+    "neutral_from_frames",
+    "neutral_from_image",
+    "strip_face_mask",
+]

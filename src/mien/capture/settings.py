@@ -27,10 +27,12 @@ class CaptureSettings:
     """One Euro cut-off increase per degree per second of head speed."""
     d_cutoff_hz: float = 1.0
     """Cut-off of the speed estimate, Hz."""
-    neutral_s: tuple[float, float] | None = (0.0, 0.5)
-    """Time interval (start, end) in seconds of the recording whose frames with a face give the performer's
-    neutral (their median), subtracted from every frame as Mascaro's FP_0 is; None: no calibration (or a
-    neutral given to the stream)."""
+    neutral_first_s: float = 0.5
+    """The performer's neutral is the median of the first this-many seconds of frames with a face (counted
+    from the first face, so a face that enters late still calibrates); 0: no calibration. Subtracted from every
+    frame as Mascaro's FP_0 is. Ignored when ``neutral_s`` or a neutral vector is given."""
+    neutral_s: tuple[float, float] | None = None
+    """A chosen interval (start, end) in seconds of the recording whose frames with a face give the neutral."""
     hold_s: float = 0.5
     """A lost face holds its last pose this long, seconds..."""
     ease_s: float = 1.0
@@ -46,7 +48,7 @@ class CaptureSettings:
             value = getattr(self, name)
             if not math.isfinite(value) or value <= 0:
                 raise InvalidValueError(name, value, "a positive cut-off frequency in Hz")
-        for name in ("beta", "pose_beta", "hold_s", "ease_s", "enter_s"):
+        for name in ("beta", "pose_beta", "hold_s", "ease_s", "enter_s", "neutral_first_s"):
             value = getattr(self, name)
             if not math.isfinite(value) or value < 0:
                 raise InvalidValueError(name, value, "a finite number >= 0")
@@ -56,3 +58,9 @@ class CaptureSettings:
                 raise InvalidValueError(
                     "neutral interval", f"{start:g}:{end:g}", "START:END seconds with 0 <= START < END"
                 )
+
+    def in_neutral(self, t_s: float, first_face_s: float) -> bool:
+        """Whether a face frame at ``t_s`` seconds is part of the neutral (the first face at ``first_face_s``)."""
+        if self.neutral_s is not None:
+            return self.neutral_s[0] <= t_s <= self.neutral_s[1]
+        return self.neutral_first_s > 0 and t_s - first_face_s <= self.neutral_first_s

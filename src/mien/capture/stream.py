@@ -19,7 +19,7 @@ last frame had a face.
 >>> import numpy as np
 >>> from mien.facs.arkit import ARKIT_INDEX
 >>> from mien.facs.catalogue import channel_index
->>> stream = CaptureStream(CaptureSettings(neutral_s=None, filter=False))
+>>> stream = CaptureStream(CaptureSettings(neutral_first_s=0.0, filter=False))
 >>> smile = np.zeros(52); smile[[ARKIT_INDEX["mouthSmileLeft"], ARKIT_INDEX["mouthSmileRight"]]] = 0.6
 >>> frame = stream.push(0.0, smile, np.zeros(3))
 >>> bool(frame[channel_index("AU12L")] > 1.0), stream.has_face
@@ -124,6 +124,7 @@ class CaptureStream:
         self._shown = np.zeros(len(FACE_CHANNELS))
         self._last_face = np.zeros(len(FACE_CHANNELS))
         self._last_face_t: float | None = None
+        self._first_face_t: float | None = None
         self._away_since: float | None = None
         self._enter: tuple[float, float, np.ndarray] | None = None  # (start, duration, pose shown at entry)
         self._weights = np.zeros(N_BLENDSHAPES)
@@ -169,7 +170,9 @@ class CaptureStream:
 
     def _found(self, t: float, raw: np.ndarray) -> np.ndarray:
         s = self.settings
-        if self._fixed_neutral is None and s.neutral_s is not None and s.neutral_s[0] <= t <= s.neutral_s[1]:
+        if self._first_face_t is None:
+            self._first_face_t = t
+        if self._fixed_neutral is None and s.in_neutral(t, self._first_face_t):
             self._samples.append(raw)
             self._neutral = np.median(np.stack(self._samples), axis=0)
         if self._away_since is not None:  # back after a gap: blend from what is shown
@@ -200,8 +203,6 @@ class CaptureStream:
 
     def _lost(self, t: float) -> np.ndarray:
         self._has_face = False
-        if self._last_face_t is None:  # no face yet: neutral
-            return self._shown.copy()
         if self._away_since is None:
             self._away_since = t
             self._held = (self._shown.copy(), self._weights.copy())
