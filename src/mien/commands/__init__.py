@@ -15,6 +15,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "head",
     "assets",
     "track",
+    "capture",
     "learn",
     "laugh",
     "validate",
