@@ -73,9 +73,12 @@ def test_laugh_controller_curves_render_and_import(tmp_path: Path, capsys: pytes
 
 
 def _track_file(path: Path) -> Path:
+    from mien.facs.arkit import ARKIT_INDEX
     from mien.tracking.track import Track
 
-    n = 4
+    n = 30
+    blendshapes = np.zeros((n, 52), np.float32)
+    blendshapes[15:, [ARKIT_INDEX["mouthSmileLeft"], ARKIT_INDEX["mouthSmileRight"]]] = 0.8  # a smile from 0.5 s
     track = Track(
         source="/videos/take.mp4",
         fps=30.0,
@@ -83,7 +86,7 @@ def _track_file(path: Path) -> Path:
         height=48,
         timestamps_s=np.arange(n) / 30.0,
         landmarks=np.zeros((n, 478, 3), np.float32),
-        blendshapes=np.zeros((n, 52), np.float32),
+        blendshapes=blendshapes,
         head_pose_deg=np.zeros((n, 3)),
         face_found=np.ones(n, bool),
         interpolated=np.zeros(n, bool),
@@ -94,14 +97,19 @@ def _track_file(path: Path) -> Path:
 
 @pytest.mark.parametrize("suffix", [".npz", ".json"])
 @pytest.mark.parametrize("command", ["render", "import", "export"])
-def test_a_track_file_says_what_to_do_with_it(
+def test_a_track_file_is_captured_into_a_face_clip(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], command: str, suffix: str
 ) -> None:
     track = _track_file(tmp_path / f"take{suffix}")
-    output = {"render": "x.png", "import": "x.npz", "export": "x.csv"}[command]
-    assert main([command, str(track), "-o", str(tmp_path / output)]) == 2
-    line = _one_error_line(capsys.readouterr().err)
-    assert "is a face track (`mien track` output" in line and "mien validate compare VIDEO" in line
+    output = tmp_path / {"render": "x.png", "import": "x.npz", "export": "x.csv"}[command]
+    assert main([command, str(track), "-o", str(output), *(SMALL if command == "render" else [])]) == 0
+    printed = capsys.readouterr()
+    assert "is a face track: captured as `mien capture` does" in printed.err + printed.out
+    if command == "import":
+        clip = read_clip(output)
+        assert "face_found" not in clip.channels
+        assert clip.channel("AU12L")[:14].max() == 0.0 and clip.channel("AU12L")[-1] > 2.0  # the smile, as AU12
+    assert output.is_file() and output.stat().st_size > 0
 
 
 # ------------------------------------------------------------------------------------------------ case 15

@@ -1,6 +1,6 @@
 """The clip file a command is given (``render``, ``export``, ``import``): read in any format mien reads, with
-warnings kept for the command to print, a face track named for what it is, and channels no output understands
-refused with what to do."""
+warnings kept for the command to print, a face track captured into a face clip (:mod:`mien.capture`), and
+channels no output understands refused with what to do."""
 
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ from mien.errors import InvalidValueError, MienError
 
 if TYPE_CHECKING:
     from mien.facs.clip import Clip
+    from mien.tracking.track import Track
 
 __all__ = ["clip_vocabulary", "read_input_clip", "refuse_foreign_channels"]
 
@@ -19,9 +20,12 @@ __all__ = ["clip_vocabulary", "read_input_clip", "refuse_foreign_channels"]
 def read_input_clip(path: Path, input_format: str | None, verb: str) -> tuple[Clip, list[str]]:
     """``(clip, warning messages)`` of the clip file ``path``; ``verb`` (``"render"``) words the refusals.
 
-    A file with no frames is refused; a face track (``mien track``'s ``.npz`` / ``.json``) is refused naming what
-    to do with it instead of the clip reader's complaint.
+    A file with no frames is refused. A face track (``mien track``'s ``.npz`` / ``.json``) is captured as
+    ``mien capture`` does with its defaults (:func:`mien.capture.capture_track`: the AU route, neutral from
+    the first face seconds, jitter filtered, faceless frames held then eased), and a message says so; a
+    captured clip's ``face_found`` mask channel is dropped (a message counts its faceless frames).
     """
+    from mien.capture import capture_track, strip_face_mask
     from mien.exchange import reader_for
 
     with warnings.catch_warnings(record=True) as caught:
@@ -29,28 +33,41 @@ def read_input_clip(path: Path, input_format: str | None, verb: str) -> tuple[Cl
         try:
             clip = reader_for(path, input_format)(path)
         except InvalidValueError:
-            if _is_track(path):
-                raise MienError(
-                    f"{path} is a face track (`mien track` output: landmarks and ARKit blendshape scores of a "
-                    f"video), not a clip: mien does not {verb} tracks; to see the video's performance on a head "
-                    "run `mien validate compare VIDEO`, or read the track in Python with mien.tracking.load_track"
+            track = _track(path) if input_format is None else None
+            if track is None:
+                raise
+            capture = capture_track(track)
+            if not capture.face_found.any():
+                raise InvalidValueError(
+                    str(path), "a face track without a face", "a track of a video that shows a face"
                 ) from None
-            raise
+            clip = capture.clip("au")
+            warnings.warn(
+                f"{path.name} is a face track: captured as `mien capture` does with its defaults ({capture.report()})",
+                stacklevel=1,
+            )
+    clip, mask = strip_face_mask(clip)
+    messages = [str(w.message) for w in caught]
+    if mask is not None and not mask.all():
+        messages.append(
+            f"{path.name}: {int((~mask).sum())} of {len(mask)} frames had no face in the recording (held, then "
+            "eased to neutral)"
+        )
     if clip.n_frames == 0:
         raise InvalidValueError(str(path), "no frames", "a clip file with at least one row of values")
-    return clip, [str(w.message) for w in caught]
+    return clip, messages
 
 
-def _is_track(path: Path) -> bool:
+def _track(path: Path) -> Track | None:
+    """The face track in ``path``, or None when it is not one."""
     if path.suffix.lower() not in (".npz", ".json"):
-        return False
+        return None
     from mien.tracking.track import load_track
 
     try:
-        load_track(path)
+        return load_track(path)
     except (MienError, OSError, ValueError, KeyError, TypeError):
-        return False
-    return True
+        return None
 
 
 def clip_vocabulary(clip: Clip) -> str:
