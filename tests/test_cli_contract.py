@@ -143,6 +143,22 @@ CASES: list[Case] = [
     case("track", "negative gap", "track {d}/clip.mp4 --max-gap-s -1", "--max-gap-s", "'-1'"),
     case("track", "output under a file", f"track {{d}}/clip.mp4 -o {UNDER_FILE}.npz", "some_file.txt is a file"),
     case("track", "wrong output format", "track {d}/clip.mp4 -o {d}/track.txt", "track.txt", ".npz or .json"),
+    # capture
+    case("capture", "missing file", "capture {d}/nothing.mp4 -o {d}/c.npz", "no such file", "nothing.mp4"),
+    case("capture", "typo in a file name", "capture {d}/clpi.mp4 -o {d}/c.npz", "did you mean", "clip.mp4"),
+    case("capture", "empty file", "capture {d}/empty.mp4 -o {d}/c.npz", "empty.mp4 is empty"),
+    case("capture", "no output", "capture {d}/clip.mp4", "-o/--output"),
+    case("capture", "corrupt video", "capture {d}/clip.mp4 -o {d}/c.npz", "clip.mp4", "a readable video file"),
+    case("capture", "not a track file", "capture {d}/library.npz -o {d}/c.npz", "library.npz", "corrupt or truncated"),
+    case("capture", "reversed neutral", "capture {d}/clip.mp4 -o {d}/c.npz --neutral 2:1", "'2:1'", "START:END"),
+    case("capture", "neutral interval not numbers", "capture {d}/clip.mp4 -o {d}/c.npz --neutral a:b", "'a:b'"),
+    case("capture", "negative neutral seconds", "capture {d}/clip.mp4 -o {d}/c.npz --neutral-first-s -1", "'-1'"),
+    case("capture", "missing neutral image", "capture {d}/clip.mp4 -o {d}/c.npz --neutral-image {d}/n.png", "n.png"),
+    case("capture", "zero cut-off", "capture {d}/clip.mp4 -o {d}/c.npz --cutoff-hz 0", "--cutoff-hz", "'0'"),
+    case("capture", "unknown route", "capture {d}/clip.mp4 -o {d}/c.npz --route blend", "--route", "'blend'"),
+    case("capture", "output format", "capture {d}/clip.mp4 -o {d}/c.anim", "c.anim", ".csv, .json or .npz"),
+    case("capture", "output under a file", f"capture {{d}}/clip.mp4 -o {UNDER_FILE}.npz", "some_file.txt is a file"),
+    case("capture", "a clip, not a recording", "capture {d}/smile.csv -o {d}/c.npz", "smile.csv", "Live Link"),
     # learn
     case(
         "learn",
