@@ -8,8 +8,11 @@ import pytest
 
 from mien.errors import InvalidValueError, UnknownNameError
 from mien.validate.detector import EMOTION_LABELS
-from mien.validate.recognition import peak_face, run_recognition, study_stimuli
+from mien.validate.emotion_classifier import FRAMINGS, face_box
+from mien.validate.judge import JUDGE_CROPS, crop_names, framing_of
+from mien.validate.recognition import judge_crops_for, peak_face, run_recognition, study_stimuli
 from mien.validate.scores import RecognitionResult, Stimulus, StimulusScore
+from mien.validate.targets import check_targets
 
 FIVE = ("joy", "sadness", "anger", "surprise", "fear")
 
@@ -26,45 +29,68 @@ def test_rate_quality_and_confusion_on_fixed_numbers() -> None:
         _score("joy", {"happy": 0.4, "surprise": 0.6}),
         _score("anger", {"angry": 0.5, "disgust": 0.3, "neutral": 0.2}),
         _score("evil", {"happy": 0.5, "angry": 0.3, "sad": 0.2}),  # blend: top two = joy's and anger's labels
-        _score("furious", {"angry": 0.5, "fear": 0.3, "surprise": 0.2}),  # top two angry, fear: a miss
+        _score("furious", {"angry": 0.5, "fear": 0.3, "surprise": 0.2}),  # top label a component, top two not
+        _score("frustrated", {"fear": 0.5, "angry": 0.3, "sad": 0.2}),  # top label fear: a miss
     )
     result = RecognitionResult(scores, "fixed", {})
     assert result.rate(expression="joy") == 0.5
-    assert result.rate(expression="evil") == 1.0 and result.rate(expression="furious") == 0.0
+    assert result.rate(expression="evil") == 1.0 and result.rate(expression="furious") == 1.0
+    assert result.rate(expression="frustrated") == 0.0
+    assert result.both_rate(expression="evil") == 1.0 and result.both_rate(expression="furious") == 0.0
+    assert np.isnan(result.both_rate(expression="joy"))  # not a blend
     # Broekens' quality target / (mean over labels x labels) = the target's share of the probability mass
     assert result.quality("joy") == pytest.approx((0.8 + 0.4) / 2)
     assert result.quality("anger") == pytest.approx(0.5)
     assert np.isnan(result.quality("evil"))
     rows, matrix = result.confusion()
-    assert rows == ["joy", "anger", "furious", "evil"]
+    assert rows == ["joy", "anger", "furious", "frustrated", "evil"]
     assert matrix[0, EMOTION_LABELS.index("happy")] == 1 and matrix[0, EMOTION_LABELS.index("surprise")] == 1
     assert result.to_json()["recognition"]["joy"] == 0.5
 
 
-def test_rates_under_another_crop_framing_on_fixed_numbers() -> None:
-    def framed(expression: str, main: dict[str, float], fer: dict[str, float] | None) -> StimulusScore:
-        score = _score(expression, main)
-        other = {} if fer is None else {"fer": tuple(fer.get(label, 0.0) for label in EMOTION_LABELS)}
-        return StimulusScore(score.stimulus, score.emotions, True, other_framings=other)
+def _judged(
+    expression: str, landmarks: dict[str, float], fer: dict[str, float], view: str = "frontal-1m"
+) -> StimulusScore:
+    """A score whose readings (as :mod:`mien.validate.judge` names them) say ``landmarks`` under the landmark crops
+    and ``fer`` under fer's, at both render sizes; the verdict is their mean, as run_recognition makes it."""
+    readings = {}
+    for name in crop_names(512):
+        probs = landmarks if framing_of(name) == "landmarks" else fer
+        vector = np.array([probs.get(label, 0.0) for label in EMOTION_LABELS])
+        readings[name] = tuple(vector / vector.sum())
+    mean = tuple(np.mean(list(readings.values()), axis=0))
+    return StimulusScore(Stimulus(expression, "ict", "a", "facs", view, 1.2), mean, True, crops=readings)
 
-    scores = (
-        framed("neutral", {"sad": 0.6, "neutral": 0.4}, {"neutral": 0.9, "sad": 0.1}),
-        framed("joy", {"happy": 0.9, "neutral": 0.1}, {"neutral": 0.6, "happy": 0.4}),
-        framed("evil", {"happy": 0.5, "angry": 0.3, "sad": 0.2}, {"angry": 0.5, "happy": 0.4, "sad": 0.1}),
-        framed("joy", {"happy": 0.9, "neutral": 0.1}, None),  # not measured in that framing: not judged there
-    )
-    result = RecognitionResult(scores, "fixed", {})
-    assert result.framings == ("landmarks", "fer")
-    assert result.rate(expression="neutral") == 0.0 and result.framed_rate("fer", expression="neutral") == 1.0
-    assert result.framed_rate("landmarks", expression="joy") == 1.0
-    assert result.framed_rate("fer", expression="joy") == 0.0  # the unmeasured render is left out, not a miss
-    assert result.framed_rate("fer", expression="evil") == 1.0  # top two: angry, happy
-    assert np.isnan(result.framed_rate("other", expression="joy"))
-    summary = result.framing_summary()
-    assert summary["fer"]["neutral"] == 1.0 and summary["landmarks"]["neutral"] == 0.0
+
+def test_a_face_that_reads_under_one_framing_only_does_not_pass() -> None:
+    """The averaging at work: joy that the landmark crops read as happy and fer's crops as neutral is a miss, though
+    the landmark crops alone would pass it; the spread across crops shows how far one crop would have moved it."""
+    one_framing = [_judged("joy", {"happy": 0.55, "neutral": 0.45}, {"neutral": 0.8, "happy": 0.2}) for _ in range(8)]
+    both = [_judged("sadness", {"sad": 0.6, "neutral": 0.4}, {"sad": 0.55, "fear": 0.45}) for _ in range(8)]
+    result = RecognitionResult((*one_framing, *both), "fixed", {}, framing="averaged")
+    assert result.framed_rate("landmarks", expression="joy") == 1.0 and result.framed_rate("fer", expression="joy") == 0
+    assert result.rate(expression="joy") == 0.0 and result.rate(expression="sadness") == 1.0
+    assert result.spread(expression="joy") == (0.0, 1.0) and result.spread(expression="sadness") == (1.0, 1.0)
+    checks = {c.target.name: c for c in check_targets(result) if c.head == "ict:a"}
+    assert checks["frontal joy"].met is False and checks["frontal joy"].spread == (0.0, 1.0)
+    assert checks["frontal sadness"].met is True
+    assert len(result.readings) == 12 and result.framings == ("averaged", "fer", "landmarks")
     data = result.to_json()
-    assert data["framing"] == "landmarks" and data["recognition_by_framing"]["fer"]["neutral"] == 1.0
-    assert data["stimuli"][0]["other_framings"]["fer"][EMOTION_LABELS.index("neutral")] == 0.9
+    assert data["framing"] == "averaged" and data["recognition_by_framing"]["landmarks"]["joy"] == 1.0
+    assert data["recognition_spread"]["joy"] == [0.0, 1.0]
+    assert len(data["stimuli"][0]["crops"]) == 12
+
+
+def test_judge_crops_cover_both_framings_jittered() -> None:
+    assert {crop.framing for crop in JUDGE_CROPS} == set(FRAMINGS) and len(JUDGE_CROPS) == 6
+    landmarks = np.array([[200.0 + 10 * (i % 10), 180.0 + 12 * (i // 10)] for i in range(68)])
+    boxes = {crop.name: face_box(landmarks, crop.framing, crop.jitter) for crop in JUDGE_CROPS}
+    plain, wide = boxes["landmarks"], boxes["landmarks up-left wide"]
+    assert wide[2] > plain[2] and wide[0] < plain[0] and wide[1] < plain[1]
+    assert boxes["fer"][1] < plain[1]  # fer's framing starts higher, in the forehead
+    with pytest.raises(UnknownNameError, match="judge"):
+        judge_crops_for("haar")
+    assert {crop.framing for crop in judge_crops_for("fer")} == {"fer"}
 
 
 def test_stimuli_cover_the_study_conditions_and_refuse_unknowns() -> None:
@@ -110,8 +136,10 @@ def test_quick_validation_five_emotions_frontal(ict_frontal: RecognitionResult) 
         assert ict_frontal.rate(expression=name) >= 0.75, name
     assert ict_frontal.rate(expression="neutral") == 1.0
     assert all(score.face_found for score in ict_frontal.scores)
-    # every render is also judged in fer's own crop framing (docs/VALIDATION.md, fourteenth pass)
-    assert all(len(score.other_framings["fer"]) == len(EMOTION_LABELS) for score in ict_frontal.scores)
+    # every verdict is the mean of the averaged judge's twelve readings (two sizes x six crops, both framings)
+    for score in ict_frontal.scores:
+        assert len(score.crops) == 12
+        np.testing.assert_allclose(score.emotions, np.mean(list(score.crops.values()), axis=0), atol=1e-6)
     assert ict_frontal.framed_rate("fer", expression="neutral") == 1.0
 
 
@@ -228,9 +256,11 @@ def test_a_user_blend_is_judged_by_its_own_components() -> None:
     define_blend("wistful", {"joy": 1.0, "sadness": 1.0})
     try:
         hit = _score("wistful", {"happy": 0.5, "sad": 0.4, "neutral": 0.1})
-        miss = _score("wistful", {"happy": 0.5, "angry": 0.4, "neutral": 0.1})
-        assert (hit.correct(), miss.correct()) == (True, False)
-        assert RecognitionResult((hit, miss), "fixed", {}).rate(expression="wistful") == 0.5
+        half = _score("wistful", {"happy": 0.5, "angry": 0.4, "neutral": 0.1})
+        miss = _score("wistful", {"angry": 0.5, "happy": 0.4, "neutral": 0.1})
+        assert (hit.correct(), half.correct(), miss.correct()) == (True, True, False)
+        assert (hit.both_components(), half.both_components()) == (True, False)
+        assert RecognitionResult((hit, half, miss), "fixed", {}).rate(expression="wistful") == pytest.approx(2 / 3)
     finally:
         remove_blend("wistful")
     assert hit.correct() is None  # no longer a name the classifier can be asked about

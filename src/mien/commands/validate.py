@@ -86,10 +86,11 @@ def _add_common(parser: argparse.ArgumentParser, default_out: str) -> None:
     add_emotion_model(parser, type=input_file)
     parser.add_argument(
         "--framing",
-        choices=("landmarks", "fer"),
-        default="landmarks",
-        help="how the emotion classifier's crop is framed: landmarks (brows to chin, the default) or fer "
-        "(the fer package's Haar-box framing, forehead to chin, calibrated on real faces; see docs/VALIDATION.md)",
+        choices=("averaged", "landmarks", "fer"),
+        default="averaged",
+        help="how a verdict is judged: averaged (the default: the classifier's probabilities averaged over both "
+        "framings, jittered, at two render sizes; see docs/VALIDATION.md), or one framing's crops only to compare: "
+        "landmarks (brows to chin) or fer (the fer package's Haar-box framing, forehead to chin)",
     )
     parser.add_argument("--size", default="512x512", help="render size WIDTHxHEIGHT (default %(default)s)")
     add_quiet(parser)
@@ -249,7 +250,7 @@ def run_emotions(args: argparse.Namespace) -> int:
     print(f"{', '.join(BASICS)}, frontal: {_percent(frontal)}")
     summary = result.framing_summary()
     if len(summary) > 1:
-        print("the five (frontal / 45 degrees) and neutral, with the classifier's crop in each framing:")
+        print("the five (frontal / 45 degrees) and neutral, by the verdict and by each framing's crops alone:")
         for framing, rates in summary.items():
             used = " (used above)" if framing == result.framing else ""
             figures = " / ".join(_percent(rates[k]) for k in ("frontal", "oblique"))

@@ -29,7 +29,7 @@ from mien.tracking.ibug68 import ibug68
 from mien.tracking.native_logs import quiet_native_logs
 from mien.validate.detector import EMOTION_LABELS
 
-__all__ = ["CROP_SCALE", "FRAMINGS", "EmotionClassifier", "crop_square", "face_box", "face_crop"]
+__all__ = ["CROP_SCALE", "FRAMINGS", "EmotionClassifier", "crop_square", "face_box", "face_crop", "grey"]
 
 CROP_SCALE = 1.15
 """Side of the ``"landmarks"`` crop relative to the larger side of the iBUG-68 points' bounding box."""
@@ -46,11 +46,15 @@ INPUT_SIZE = 64
 """The model's input side in pixels."""
 
 
-def face_box(landmarks: np.ndarray, framing: str = "landmarks") -> tuple[int, int, int]:
+def face_box(
+    landmarks: np.ndarray, framing: str = "landmarks", jitter: tuple[float, float, float] = (0.0, 0.0, 1.0)
+) -> tuple[int, int, int]:
     """``(x0, y0, side)`` pixels of the square crop around ``landmarks`` ((68, 2) iBUG or (478, 2) MediaPipe).
 
     The side is the framing's scale (:data:`FRAMINGS`) times the larger extent of the 68 points; the centre is the
     middle of the inner features' horizontal extent and of their vertical extent, raised by the framing's shift.
+    ``jitter`` ``(dx, dy, scale)`` moves the centre by ``dx`` and ``dy`` of the side (right, down) and scales the
+    side by ``scale`` (the averaged judge's crops, :data:`mien.validate.judge.JUDGE_CROPS`).
     """
     scale, raise_by = _framing(framing)
     points = np.asarray(landmarks, dtype=np.float64)[:, :2]
@@ -67,6 +71,9 @@ def face_box(landmarks: np.ndarray, framing: str = "landmarks") -> tuple[int, in
         centre[0] = (inner[:, 0].min() + inner[:, 0].max()) / 2.0
     half = max(float((hi - lo).max()) * scale / 2.0, 4.0)
     centre[1] -= raise_by * 2.0 * half
+    dx, dy, grow = jitter
+    centre += np.array([dx, dy]) * 2.0 * half
+    half *= grow
     return round(centre[0] - half), round(centre[1] - half), round(2 * half)
 
 
@@ -86,14 +93,26 @@ def _framing(name: str) -> tuple[float, float]:
         raise UnknownNameError("crop framing", name, tuple(FRAMINGS)) from None
 
 
-def face_crop(rgb: np.ndarray, landmarks: np.ndarray, framing: str = "landmarks", size: int = INPUT_SIZE) -> np.ndarray:
+def grey(rgb: np.ndarray) -> np.ndarray:
+    """(h, w) float32 ITU-R BT.601 luma of ``rgb`` ((h, w, 3+) uint8), as OpenCV's ``COLOR_RGB2GRAY``."""
+    return np.asarray(rgb[..., :3].astype(np.float32) @ np.array([0.299, 0.587, 0.114], np.float32))
+
+
+def face_crop(
+    rgb: np.ndarray,
+    landmarks: np.ndarray,
+    framing: str = "landmarks",
+    size: int = INPUT_SIZE,
+    jitter: tuple[float, float, float] = (0.0, 0.0, 1.0),
+    luma: np.ndarray | None = None,
+) -> np.ndarray:
     """(size, size) float32 grey crop in 0..1 of the square around ``landmarks`` (see :func:`face_box`).
 
-    Pixels outside the image are edge-replicated; the grey is ITU-R BT.601 luma, as OpenCV's ``COLOR_RGB2GRAY``.
+    Pixels outside the image are edge-replicated; the grey is :func:`grey` (pass it as ``luma`` to reuse it).
     """
     image = require("PIL.Image", "render")
-    grey = rgb[..., :3].astype(np.float32) @ np.array([0.299, 0.587, 0.114], np.float32)
-    patch = crop_square(grey, face_box(landmarks, framing))
+    luma = grey(rgb) if luma is None else luma
+    patch = crop_square(luma, face_box(landmarks, framing, jitter))
     resized = image.fromarray(np.clip(patch + 0.5, 0, 255).astype(np.uint8)).resize(
         (size, size), image.Resampling.BILINEAR
     )
@@ -127,17 +146,28 @@ class EmotionClassifier:
         if shapes != ((1, INPUT_SIZE, INPUT_SIZE, 1), (1, len(EMOTION_LABELS))):
             expected = f"input (1, 64, 64, 1) and output (1, 7); this one has {shapes[0]} -> {shapes[1]}"
             raise InvalidValueError("emotion model", str(self.model_path), expected)
+        self._batch = 1
         self._input = int(inputs["index"])
         self._output = int(outputs["index"])
 
     def classify_crop(self, crop: np.ndarray) -> np.ndarray:
         """(7,) float32 probabilities for a (64, 64) grey crop in 0..1."""
-        x = (np.asarray(crop, np.float32).reshape(1, INPUT_SIZE, INPUT_SIZE, 1) - 0.5) * 2.0
+        return self.classify_crops(np.asarray(crop)[None])[0]
+
+    def classify_crops(self, crops: np.ndarray) -> np.ndarray:
+        """(n, 7) float32 probabilities for (n, 64, 64) grey crops in 0..1, in one batched call of the model."""
+        x = (np.asarray(crops, np.float32).reshape(-1, INPUT_SIZE, INPUT_SIZE, 1) - 0.5) * 2.0
+        if len(x) == 0:
+            return np.zeros((0, len(EMOTION_LABELS)), np.float32)
+        if len(x) != self._batch:
+            self._interpreter.resize_tensor_input(self._input, [len(x), INPUT_SIZE, INPUT_SIZE, 1])
+            self._interpreter.allocate_tensors()
+            self._batch = len(x)
         self._interpreter.set_tensor(self._input, x)
         self._interpreter.invoke()
-        probs = np.array(self._interpreter.get_tensor(self._output)[0], dtype=np.float32)
-        total = float(probs.sum())
-        return probs / total if total > 0 else probs
+        probs = np.array(self._interpreter.get_tensor(self._output), dtype=np.float32)
+        total = probs.sum(axis=1, keepdims=True)
+        return np.divide(probs, total, out=probs.copy(), where=total > 0)
 
     def classify(self, rgb: np.ndarray, landmarks: np.ndarray, framing: str | None = None) -> np.ndarray:
         """(7,) probabilities for the face around ``landmarks`` ((n, 2) pixels) on ``rgb`` ((h, w, 3) uint8),

@@ -12,6 +12,7 @@ from pathlib import Path
 
 from mien.paths import require_asset
 from mien.render.camera import VIEWS
+from mien.validate.emotion_classifier import FRAMINGS
 from mien.validate.expressions import EXPRESSIONS
 from mien.validate.face_detector import FaceDetector
 
@@ -30,8 +31,9 @@ class ValidateOptions:
     """MediaPipe ``face_landmarker.task`` (None: ``$MIEN_FACE_LANDMARKER`` or the config)."""
     emotion_model_path: Path | None = None
     """FER emotion classifier ``.tflite`` (None: ``$MIEN_EMOTION_MODEL`` or the config)."""
-    framing: str = "landmarks"
-    """How the classifier's crop is framed (:data:`mien.validate.emotion_classifier.FRAMINGS`)."""
+    framing: str = "averaged"
+    """How a verdict is judged: ``"averaged"`` (every crop of :mod:`mien.validate.judge`), or one framing of
+    :data:`mien.validate.emotion_classifier.FRAMINGS` (its three jittered crops only, to compare)."""
     show_progress: bool = True
     """Show progress bars."""
     bases: tuple[str, ...] = ("facs", "feature_points")
@@ -56,4 +58,5 @@ def open_detector(options: ValidateOptions, emotions: bool = True) -> FaceDetect
     require_asset("face_landmarker", options.landmarker_path)
     if emotions:
         require_asset("emotion_model", options.emotion_model_path)
-    return FaceDetector(options.landmarker_path, options.emotion_model_path, emotions=emotions, framing=options.framing)
+    framing = options.framing if options.framing in FRAMINGS else "landmarks"
+    return FaceDetector(options.landmarker_path, options.emotion_model_path, emotions=emotions, framing=framing)

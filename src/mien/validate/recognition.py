@@ -29,6 +29,7 @@ this module renders, judges and writes them.
 
 from __future__ import annotations
 
+import contextlib
 import time
 from collections.abc import Sequence
 from pathlib import Path
@@ -53,6 +54,7 @@ from mien.validate.expressions import EXPRESSIONS
 from mien.validate.face_detector import FaceDetector
 from mien.validate.facs_reading import with_facs_readings
 from mien.validate.figures import plot_confusion, plot_quality
+from mien.validate.judge import JUDGE_CROPS, RENDER_SCALES, JudgeCrop, crop_names, judge
 from mien.validate.landmark_aus import LandmarkAUs
 from mien.validate.options import ValidateOptions, open_detector
 from mien.validate.scores import RecognitionResult, Stimulus, StimulusScore
@@ -60,6 +62,7 @@ from mien.validate.stimuli import StimulusRenderer
 
 __all__ = [
     "PEAK_TIME_S",
+    "judge_crops_for",
     "peak_face",
     "recognition_study",
     "run_recognition",
@@ -131,72 +134,108 @@ def run_recognition(
     size: tuple[int, int] = (512, 512),
     keep_images: bool = False,
     progress: bool = True,
+    judge_with: str = "averaged",
+    samples: int = 0,
 ) -> RecognitionResult:
-    """Render and classify every stimulus (grouped by head, basis and view so each setup is built once)."""
+    """Render and judge every stimulus (grouped by head and basis so each rig and renderer is built once).
+
+    Each face is judged by the averaged judge (:mod:`mien.validate.judge`) when the detector holds the FER
+    classifier: rendered at every size of :data:`~mien.validate.judge.RENDER_SCALES` of ``size``, its landmarks
+    found on the first, read under every crop of :data:`~mien.validate.judge.JUDGE_CROPS` (``judge_with`` a framing
+    name: that framing's crops only), the verdict the mean. Other detectors give their own probabilities.
+    ``samples``: multisample anti-aliasing of the renders (0: off; turning it on moves 0.9% of verdicts,
+    docs/VALIDATION.md).
+    """
     own = detector is None
     active: Detector = FaceDetector() if detector is None else detector
-    framing = str(getattr(active, "framing", "landmarks"))
     classifier = _framed_classifier(active)
+    mediapipe = getattr(active, "mediapipe", None) if classifier is not None else None
+    crops = judge_crops_for(judge_with) if classifier is not None else ()
+    framing = judge_with if classifier is not None else str(getattr(active, "framing", "landmarks"))
+    width = int(size[0])
+    scales = RENDER_SCALES if classifier is not None else RENDER_SCALES[:1]
+    names = crop_names(width, scales, crops)
     timings = {"load": 0.0, "render": 0.0, "detect": 0.0}
     solver = AUSolver()  # the 18 OpenFACS AUs: AU9/AU10 for disgust's signs, all of them for the FACS reading
     scores: list[StimulusScore | None] = [None] * len(stimuli)
     images: dict[int, np.ndarray] = {}
-    groups: dict[tuple[str, str, str, str], list[int]] = {}
+    groups: dict[tuple[str, str, str], dict[str, list[int]]] = {}
     for index, stimulus in enumerate(stimuli):
-        groups.setdefault((stimulus.head, stimulus.identity, stimulus.basis, stimulus.view), []).append(index)
+        setup = groups.setdefault((stimulus.head, stimulus.identity, stimulus.basis), {})
+        setup.setdefault(stimulus.view, []).append(index)
     bar = progress_bar(range(len(stimuli)), total=len(stimuli), desc="recognition", enabled=progress)
     ticker = iter(bar)
     rigs: dict[tuple[str, str, bool], Any] = {}
     estimators: dict[tuple[str, str, bool], LandmarkAUs] = {}
     try:
-        for (head, identity, basis, view), indices in groups.items():
+        for (head, identity, basis), by_view in groups.items():
             started = time.perf_counter()
-            key = (head, identity, basis == "feature_points")
+            key: tuple[str, str, bool] = (head, identity, basis == "feature_points")
             if key not in rigs:
                 rigs[key] = load_head(head, identity, feature_points=key[2])
             rig = rigs[key]
             timings["load"] += time.perf_counter() - started
-            with StimulusRenderer(rig, VIEWS[view].camera, size) as renderer:
+            first = VIEWS[next(iter(by_view))].camera
+            sizes = [(round(size[0] * k), round(size[1] * k)) for k in scales]
+            with contextlib.ExitStack() as stack:
+                renderers = [stack.enter_context(StimulusRenderer(rig, first, s, samples=samples)) for s in sizes]
+                renderer = renderers[0]
                 if key not in estimators:
                     started = time.perf_counter()
                     estimators[key] = LandmarkAUs(rig, renderer.weights)
                     timings["load"] += time.perf_counter() - started
                 landmark_aus = estimators[key]
-                for index in indices:
-                    stimulus = stimuli[index]
-                    started = time.perf_counter()
-                    frame, features = peak_face(stimulus.expression, stimulus.intensity, basis)
-                    weights = renderer.weights(frame, features)
-                    rgb, hint = renderer.render_weights(weights)
-                    deformed = renderer.last_vertices
-                    nose_lip = float(np.linalg.norm(deformed[rig.landmarks[33]] - deformed[rig.landmarks[51]])) * 1e3
-                    timings["render"] += time.perf_counter() - started
-                    started = time.perf_counter()
-                    found = active.detect(rgb, hint)
-                    others = {}
-                    if classifier is not None and found.landmarks is not None:
-                        for name in FRAMINGS:
-                            if name != framing:
-                                probabilities = classifier.classify(rgb, found.landmarks, name)
-                                others[name] = tuple(float(p) for p in probabilities)
-                    timings["detect"] += time.perf_counter() - started
-                    emotions = found.emotions if found.emotions is not None else np.full(len(EMOTION_LABELS), np.nan)
-                    aus: dict[str, float] = {}
-                    if found.blendshapes is not None:
-                        values = solver.solve(found.blendshapes)
-                        aus = {f"AU{code}": float(v) for code, v in zip(solver.aus, values, strict=True)}
-                    scores[index] = StimulusScore(
-                        stimulus,
-                        tuple(float(p) for p in emotions),
-                        bool(found.found and not found.landmarks_from_hint),
-                        aus,
-                        nose_lip,
-                        landmark_aus.estimate(deformed),
-                        other_framings=others,
-                    )
-                    if keep_images and found.landmarks is not None:
-                        images[index] = _judged_crop(rgb, found.landmarks, framing)
-                    next(ticker, None)
+                for view, indices in by_view.items():
+                    for each in renderers:
+                        each.set_camera(VIEWS[view].camera)
+                    for index in indices:
+                        stimulus = stimuli[index]
+                        started = time.perf_counter()
+                        frame, features = peak_face(stimulus.expression, stimulus.intensity, basis)
+                        weights = renderer.weights(frame, features)
+                        rgb, hint = renderer.render_weights(weights)
+                        deformed = renderer.last_vertices
+                        smaller = [each.draw(deformed) for each in renderers[1:]]
+                        lm = rig.landmarks
+                        nose_lip = float(np.linalg.norm(deformed[lm[33]] - deformed[lm[51]])) * 1e3
+                        timings["render"] += time.perf_counter() - started
+                        started = time.perf_counter()
+                        if mediapipe is not None:
+                            found = mediapipe.detect(rgb)
+                            landmarks = found.landmarks if found.found else hint
+                            from_hint = not found.found
+                        else:
+                            found = active.detect(rgb, hint)
+                            landmarks, from_hint = found.landmarks, found.landmarks_from_hint
+                        readings: dict[str, tuple[float, ...]] = {}
+                        emotions = found.emotions
+                        if classifier is not None and landmarks is not None:
+                            renders = [(rgb, landmarks)]
+                            renders += [(small, landmarks * (small.shape[1] / width)) for small in smaller]
+                            probabilities = judge(classifier, renders, crops)
+                            readings = {
+                                n: tuple(float(p) for p in row) for n, row in zip(names, probabilities, strict=True)
+                            }
+                            emotions = probabilities.mean(axis=0)
+                        timings["detect"] += time.perf_counter() - started
+                        if emotions is None:
+                            emotions = np.full(len(EMOTION_LABELS), np.nan)
+                        aus: dict[str, float] = {}
+                        if found.blendshapes is not None:
+                            values = solver.solve(found.blendshapes)
+                            aus = {f"AU{code}": float(v) for code, v in zip(solver.aus, values, strict=True)}
+                        scores[index] = StimulusScore(
+                            stimulus,
+                            tuple(float(p) for p in emotions),
+                            bool(found.found and not from_hint),
+                            aus,
+                            nose_lip,
+                            landmark_aus.estimate(deformed),
+                            crops=readings,
+                        )
+                        if keep_images and landmarks is not None:
+                            images[index] = _judged_crop(rgb, landmarks, crops[0].framing if crops else framing)
+                        next(ticker, None)
     finally:
         if own:
             active.close()
@@ -212,6 +251,16 @@ def _framed_classifier(detector: Any) -> Any:
     for other detectors."""
     emotion = getattr(detector, "emotion", detector)
     return getattr(emotion, "classifier", None)
+
+
+def judge_crops_for(judge_with: str) -> tuple[JudgeCrop, ...]:
+    """The crops of the judge named ``judge_with``: ``"averaged"`` (all of
+    :data:`~mien.validate.judge.JUDGE_CROPS`) or a framing name (that framing's three)."""
+    if judge_with == "averaged":
+        return JUDGE_CROPS
+    if judge_with not in FRAMINGS:
+        raise UnknownNameError("judge", judge_with, ("averaged", *FRAMINGS))
+    return tuple(crop for crop in JUDGE_CROPS if crop.framing == judge_with)
 
 
 def _sheet_label(score: StimulusScore) -> str:
@@ -263,6 +312,9 @@ def recognition_study(heads: Sequence[tuple[str, str]], options: ValidateOptions
     stimuli = study_stimuli(heads, options.bases, options.views, options.intensities, options.expressions)
     detector = open_detector(options)
     try:
-        return run_recognition(stimuli, detector, options.size_px, keep_images=True, progress=options.show_progress)
+        return run_recognition(
+            stimuli, detector, options.size_px, keep_images=True, progress=options.show_progress,
+            judge_with=options.framing,
+        )  # fmt: skip
     finally:
         detector.close()

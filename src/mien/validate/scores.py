@@ -17,6 +17,7 @@ import numpy as np
 
 from mien.validate.detector import EMOTION_LABELS
 from mien.validate.expressions import BASICS, EXPRESSIONS, HUMAN_QUALITY, LABEL_OF, blend_components, expected_labels
+from mien.validate.judge import framing_of
 from mien.validate.targets import FRONTAL, OBLIQUE, check_targets
 
 __all__ = ["RecognitionResult", "Stimulus", "StimulusScore"]
@@ -60,14 +61,19 @@ class StimulusScore:
     facs_top: str | None = None
     """The FACS reading: the emotion whose EMFACS prototype best matches the AUs detected above the same
     setup's neutral (see the module docstring); None without blendshapes, for neutral, or when nothing moved."""
-    other_framings: dict[str, tuple[float, ...]] = field(default_factory=dict)
-    """The classifier's probabilities on the same render cropped in its other framings
-    (:data:`~mien.validate.emotion_classifier.FRAMINGS`), keyed by framing; empty for other detectors."""
+    crops: dict[str, tuple[float, ...]] = field(default_factory=dict)
+    """Every reading of the averaged judge (:mod:`mien.validate.judge`): reading name (``"fer up-left wide @384"``)
+    -> the classifier's probabilities on that crop; :attr:`emotions` is their mean. Empty for other detectors."""
 
-    def _probabilities(self, framing: str | None) -> tuple[float, ...]:
-        if framing is None:
-            return self.emotions
-        return self.other_framings.get(framing, ())
+    def probabilities(self, framing: str | None = None, reading: str | None = None) -> tuple[float, ...]:
+        """The probabilities judged: :attr:`emotions`; with ``reading`` that one crop's; with ``framing`` the mean
+        of that framing's readings (:func:`~mien.validate.judge.framing_of`); ``()`` when not measured."""
+        if reading is not None:
+            return self.crops.get(reading, ())
+        if framing is not None:
+            rows = [p for name, p in self.crops.items() if framing_of(name) == framing]
+            return tuple(float(v) for v in np.mean(rows, axis=0)) if rows else ()
+        return self.emotions
 
     @property
     def top(self) -> str:
@@ -80,24 +86,31 @@ class StimulusScore:
         order = np.argsort(self.emotions)[::-1]
         return EMOTION_LABELS[int(order[0])], EMOTION_LABELS[int(order[1])]
 
-    def correct(self, framing: str | None = None) -> bool | None:
-        """Recognised? (top label for basics and neutral; top two for blends); None if not judgeable.
+    def correct(self, framing: str | None = None, reading: str | None = None) -> bool | None:
+        """Recognised? The top label is the expression's (a blend: one of its components'); None if not judgeable.
 
-        ``framing``: judge the probabilities of that other crop framing (:attr:`other_framings`) instead; None
-        when it was not measured.
+        ``framing`` / ``reading``: judge the probabilities of :meth:`probabilities` instead of the averaged
+        verdict; None when they were not measured.
         """
-        probabilities = self._probabilities(framing)
-        if len(probabilities) != len(EMOTION_LABELS) or not np.all(np.isfinite(probabilities)):
-            return None if framing is not None else self._correct_labels(self.top, self.top2)
-        order = np.argsort(probabilities)[::-1]
-        first, second = EMOTION_LABELS[int(order[0])], EMOTION_LABELS[int(order[1])]
-        return self._correct_labels(first, (first, second))
+        return self._judged(framing, reading, both=False)
 
-    def _correct_labels(self, top: str, top2: tuple[str, str]) -> bool | None:
+    def both_components(self, framing: str | None = None, reading: str | None = None) -> bool | None:
+        """For a blend: are its two top labels both its components' (reported beside :meth:`correct`, no bar)?
+        None for anything else or when not judgeable."""
+        if blend_components(self.stimulus.expression) is None:
+            return None
+        return self._judged(framing, reading, both=True)
+
+    def _judged(self, framing: str | None, reading: str | None, both: bool) -> bool | None:
+        probabilities = self.probabilities(framing, reading)
+        if len(probabilities) != len(EMOTION_LABELS) or not np.all(np.isfinite(probabilities)):
+            return None
         expected = expected_labels(self.stimulus.expression)
         if expected is None:
             return None  # the classifier has no label for it (a laughter type...)
-        return top == expected[0] if len(expected) == 1 else set(top2) == set(expected)
+        order = np.argsort(probabilities)[::-1]
+        first, second = EMOTION_LABELS[int(order[0])], EMOTION_LABELS[int(order[1])]
+        return {first, second} == set(expected) if both else first in expected
 
 
 @dataclass(frozen=True, eq=False)
@@ -113,8 +126,8 @@ class RecognitionResult:
     images: dict[int, np.ndarray] = field(default_factory=dict, repr=False)
     """Index into :attr:`scores` -> the (s, s, 3) uint8 colour crop the classifier judged (kept when asked)."""
     framing: str = "landmarks"
-    """The crop framing of :attr:`StimulusScore.emotions` (the others are in
-    :attr:`StimulusScore.other_framings`)."""
+    """How :attr:`StimulusScore.emotions` was judged: ``"averaged"`` (every reading of :mod:`mien.validate.judge`),
+    or the one crop framing of a detector without readings."""
 
     def subset(self, **conditions: Any) -> list[StimulusScore]:
         """Scores whose stimulus matches every ``field=value`` (a value may be a tuple of allowed values)."""
@@ -128,27 +141,47 @@ class RecognitionResult:
                 out.append(score)
         return out
 
-    def rate(self, **conditions: Any) -> float:
-        """Share of matching stimuli recognised (nan when none match)."""
-        judged = [float(j) for j in (s.correct() for s in self.subset(**conditions)) if j is not None]
+    def rate(self, framing: str | None = None, reading: str | None = None, **conditions: Any) -> float:
+        """Share of matching stimuli recognised (nan when none match); ``framing`` / ``reading``: judged by that
+        framing's readings or that one reading alone (:meth:`StimulusScore.correct`)."""
+        scores = self.subset(**conditions)
+        judged = [float(j) for j in (s.correct(framing, reading) for s in scores) if j is not None]
+        return float(np.mean(judged)) if judged else float("nan")
+
+    def both_rate(self, reading: str | None = None, **conditions: Any) -> float:
+        """Share of matching blends whose two top labels are both components (nan when none)."""
+        scores = self.subset(**conditions)
+        judged = [float(j) for j in (s.both_components(reading=reading) for s in scores) if j is not None]
         return float(np.mean(judged)) if judged else float("nan")
 
     def framed_rate(self, framing: str, **conditions: Any) -> float:
-        """:meth:`rate` with the classifier's crop in ``framing`` (nan when that framing was not measured)."""
+        """:meth:`rate` judged by the readings of one crop framing only (their mean), or by the verdict when
+        ``framing`` is the result's :attr:`framing`; nan when that framing was not measured."""
         if framing == self.framing:
             return self.rate(**conditions)
-        judged = [float(j) for j in (s.correct(framing) for s in self.subset(**conditions)) if j is not None]
-        return float(np.mean(judged)) if judged else float("nan")
+        return self.rate(framing=framing, **conditions)
+
+    @property
+    def readings(self) -> tuple[str, ...]:
+        """Every reading of the averaged judge, in the order measured (empty for other detectors)."""
+        return tuple(dict.fromkeys(name for score in self.scores for name in score.crops))
+
+    def spread(self, measure: str = "rate", **conditions: Any) -> tuple[float, float]:
+        """``(lowest, highest)`` of a figure (:meth:`rate` or :meth:`both_rate`, ``measure``) judged by each reading
+        alone: how far one crop could move it. ``(nan, nan)`` without readings."""
+        figure = self.rate if measure == "rate" else self.both_rate
+        values = [v for v in (figure(reading=name, **conditions) for name in self.readings) if v == v]
+        return (min(values), max(values)) if values else (float("nan"), float("nan"))
 
     @property
     def framings(self) -> tuple[str, ...]:
-        """Every crop framing measured: :attr:`framing` first, then the others."""
-        others = {name for score in self.scores for name in score.other_framings}
+        """Every way the figures can be judged: :attr:`framing` first, then each crop framing measured."""
+        others = {framing_of(name) for name in self.readings}
         return (self.framing, *sorted(others - {self.framing}))
 
     def framing_summary(self) -> dict[str, dict[str, float]]:
         """``{framing: {"frontal": .., "oblique": .., "neutral": ..}}``: the five basic emotions recognised frontally
-        and at 45 degrees, and neutral read as neutral, with the classifier's crop in each measured framing."""
+        and at 45 degrees, and neutral read as neutral, by the verdict and by each framing's readings alone."""
         views = {"frontal": FRONTAL, "oblique": OBLIQUE}
         return {
             framing: {
@@ -228,11 +261,19 @@ class RecognitionResult:
                     "nose_lip_mm": None if not np.isfinite(s.nose_lip_mm) else round(s.nose_lip_mm, 3),
                     "landmark_aus": {k: round(v, 3) for k, v in s.landmark_aus.items()},
                     "facs_top": s.facs_top,
-                    "other_framings": {k: [round(float(p), 4) for p in v] for k, v in s.other_framings.items()},
+                    "both_components": s.both_components(),
+                    "crops": {k: [round(float(p), 4) for p in v] for k, v in s.crops.items()},
                 }
                 for s in self.scores
             ],
             "recognition": {e: self.rate(expression=e) for e in ("neutral", *EXPRESSIONS)},
+            "recognition_spread": {e: list(self.spread(expression=e)) for e in ("neutral", *EXPRESSIONS)},
+            "blends_both_components": {
+                e: {"value": self.both_rate(expression=e), "spread": list(self.spread("both", expression=e))}
+                for e in EXPRESSIONS
+                if blend_components(e) is not None
+            },
+            "readings": list(self.readings),
             "recognition_by_framing": {
                 framing: {e: self.framed_rate(framing, expression=e) for e in ("neutral", *EXPRESSIONS)}
                 for framing in self.framings
@@ -250,6 +291,7 @@ class RecognitionResult:
                     "value": c.value,
                     "interval95": list(c.interval),
                     "met": c.met,
+                    "spread": list(c.spread),
                     "decided": c.decided,
                 }
                 for c in check_targets(self)

@@ -1,14 +1,15 @@
 """Rendering faces for validation: face frames on a head through a camera -> RGB images + landmark hints.
 
-One :class:`StimulusRenderer` per (rig, camera, size) keeps its offscreen renderer and deformer, so a report
-renders hundreds of stills without rebuilding them. Each image comes with ``hint``: the rig's 68 iBUG
-landmark vertices, deformed with the face and projected through the camera ((68, 2) pixels), which is where
-the face is whether or not a detector finds it (:mod:`mien.validate.detector`).
+One :class:`StimulusRenderer` per (rig, size) keeps its offscreen renderer and deformer, so a report renders
+hundreds of stills without rebuilding them; :meth:`StimulusRenderer.set_camera` moves it from view to view. Each
+image comes with ``hint``: the rig's 68 iBUG landmark vertices, deformed with the face and projected through the
+camera ((68, 2) pixels), which is where the face is whether or not a detector finds it (:mod:`mien.validate.detector`).
 """
 
 from __future__ import annotations
 
 from types import TracebackType
+from typing import Any
 
 import numpy as np
 
@@ -28,6 +29,7 @@ class StimulusRenderer:
     """Render face frames of ``rig`` through ``camera`` at ``size`` (width, height) pixels.
 
     ``mapping``: the AU -> ARKit table (:class:`mien.rig.mapping.AUMapping`; default the shipped one).
+    ``samples``: multisample anti-aliasing (0 off; the recognition study renders without it, docs/VALIDATION.md).
     Use as a context manager (it holds an OpenGL context).
     """
 
@@ -59,6 +61,17 @@ class StimulusRenderer:
     def close(self) -> None:
         """Release the OpenGL context (idempotent)."""
         self._renderer.close()
+
+    def set_camera(self, camera: Camera) -> None:
+        """Look through ``camera`` from the next render on (the context, mesh and deformer are kept)."""
+        self.camera = camera
+        target: Any = getattr(self._renderer, "textured", self._renderer)  # a head file's renderer wraps its own
+        target.set_camera(camera)
+
+    def draw(self, vertices: np.ndarray) -> np.ndarray:
+        """(h, w, 3) uint8 picture of already deformed ``vertices`` ((n_vertices, 3) metres), e.g. another
+        renderer's :attr:`last_vertices` (the same face at another size)."""
+        return np.asarray(self._renderer.render(np.asarray(vertices, np.float32)))
 
     def weights(self, frame: np.ndarray, feature_weights: np.ndarray | None = None) -> np.ndarray:
         """(n_targets,) float32 morph weights of a (62,) face frame (and optional (54,) feature weights)."""
