@@ -83,17 +83,17 @@ class _Newest:
     """A one-frame mailbox: put replaces what waits (and says so), get waits up to a timeout."""
 
     def __init__(self) -> None:
-        self._item: tuple[float, np.ndarray] | None = None
+        self._item: tuple[float, float, np.ndarray] | None = None
         self._ready = threading.Condition()
 
-    def put(self, item: tuple[float, np.ndarray]) -> bool:
+    def put(self, item: tuple[float, float, np.ndarray]) -> bool:
         with self._ready:
             replaced = self._item is not None
             self._item = item
             self._ready.notify()
             return replaced
 
-    def get(self, timeout_s: float) -> tuple[float, np.ndarray] | None:
+    def get(self, timeout_s: float) -> tuple[float, float, np.ndarray] | None:
         with self._ready:
             if self._item is None:
                 self._ready.wait(timeout_s)
@@ -141,7 +141,7 @@ class CaptureSource:
         self._consumed = 0  # newest number a tick took
         self._has_face = False
         self._costs: deque[float] = deque(maxlen=256)  # tracking seconds of the recent frames
-        self._timings: deque[list[Any]] = deque(maxlen=TIMINGS_KEPT)  # [seq, arrival, start, tracked, tick]
+        self._timings: deque[list[Any]] = deque(maxlen=TIMINGS_KEPT)  # [seq, arrival, start, tracked, tick, source_s]
         self._origin = 0.0  # time.monotonic() of the capture's time 0
 
     # ------------------------------------------------------------------ set-up
@@ -215,8 +215,15 @@ class CaptureSource:
         with self._lock:
             costs = np.array(self._costs) * 1e3 if self._costs else None
             timings = [
-                {"frame": seq, "arrival_s": arrival, "track_start_s": start, "tracked_s": tracked, "tick": tick}
-                for seq, arrival, start, tracked, tick in self._timings
+                {
+                    "frame": seq,
+                    "source_s": source_s,
+                    "arrival_s": arrival,
+                    "track_start_s": start,
+                    "tracked_s": tracked,
+                    "tick": tick,
+                }
+                for seq, arrival, start, tracked, tick, source_s in self._timings
             ]
             return {
                 "source": self.config.source,
@@ -233,12 +240,14 @@ class CaptureSource:
 
     # ------------------------------------------------------------------ threads
 
-    def _frames(self) -> Iterator[tuple[float, np.ndarray]]:
-        """``(arrival monotonic s, rgb)``: a camera's frames as read, a file's when their time stamps come due."""
+    def _frames(self) -> Iterator[tuple[float, float, np.ndarray]]:
+        """``(arrival monotonic s, source time s, rgb)``: a camera's frames as read (source time: since the start), a
+        file's when their time stamps come due (source time: the time stamp, plus the earlier passes of a loop)."""
         if self.device is not None:
             from mien.tracking.camera import iter_camera
 
-            yield from iter_camera(self.device)
+            for arrival_s, rgb in iter_camera(self.device):
+                yield arrival_s, arrival_s - self._origin, rgb
             return
         from mien.tracking.video import iter_frames
 
@@ -252,7 +261,7 @@ class CaptureSource:
                 if pts_s > last_s:
                     period_s = pts_s - last_s
                 last_s = pts_s
-                yield time.monotonic(), rgb
+                yield time.monotonic(), offset_s - self._origin + pts_s, rgb
             if not self.config.loop:
                 return
             offset_s += last_s + period_s  # the next pass starts one frame after the last one
@@ -262,12 +271,12 @@ class CaptureSource:
             while not self._ready.wait(0.05):  # the landmarker loads first, so the video does not play unseen
                 if self._stop.is_set() or self.state == "failed":
                     return
-            for arrival_s, rgb in self._frames():
+            for arrival_s, source_s, rgb in self._frames():
                 if self._stop.is_set():
                     return
                 with self._lock:
                     self.counts["frames_read"] += 1
-                if self._newest.put((arrival_s, rgb)):
+                if self._newest.put((arrival_s, source_s, rgb)):
                     with self._lock:
                         self.counts["frames_dropped"] += 1
             with self._lock:
@@ -299,9 +308,9 @@ class CaptureSource:
                     if item is None:  # nothing new: a stalled camera or a video at its end loses the face
                         if self._finished.is_set() or now - last_s >= _STALL_S:
                             stream_s = max(now - self._origin, stream_s + 1e-6)
-                            self._publish(stream.push(stream_s, None, None), None, now, now, False)
+                            self._publish(stream.push(stream_s, None, None), None, 0.0, now, now, False)
                         continue
-                    arrival_s, rgb = item
+                    arrival_s, source_s, rgb = item
                     last_s = now
                     begin = time.perf_counter()
                     found = landmarker.detect(rgb, arrival_s - self._origin)
@@ -317,7 +326,7 @@ class CaptureSource:
                         self.counts["frames_tracked"] += 1
                         self.counts["frames_without_face"] += found is None
                         self.counts["frames_face_too_small"] += small
-                    self._publish(frame, arrival_s, now, time.monotonic(), face)
+                    self._publish(frame, arrival_s, source_s, now, time.monotonic(), face)
         except Exception as exc:  # a model MediaPipe refuses, a bug: the characters ease to neutral
             with self._lock:
                 self.state, self.error = "failed", f"tracking failed: {exc}"[:300]
@@ -331,7 +340,13 @@ class CaptureSource:
         return float((x.max() - x.min()) * width)
 
     def _publish(
-        self, frame: np.ndarray, arrival_s: float | None, start_s: float, tracked_s: float, face: bool
+        self,
+        frame: np.ndarray,
+        arrival_s: float | None,
+        source_s: float,
+        start_s: float,
+        tracked_s: float,
+        face: bool,
     ) -> None:
         values = np.array(frame, dtype=np.float64)
         if not np.isfinite(values).all():
@@ -341,6 +356,6 @@ class CaptureSource:
             self._frame = values
             self._has_face = face
             if arrival_s is not None:
-                self._timings.append([self._seq, arrival_s, start_s, tracked_s, None])
+                self._timings.append([self._seq, arrival_s, start_s, tracked_s, None, source_s])
             if self.state in ("starting", "tracking", "no_face"):
                 self.state = "tracking" if face else "no_face"

@@ -79,6 +79,7 @@ class CaptureTiming(BaseModel):
     """One tracked frame of the capture source, on the server's ``time.monotonic()`` clock (seconds)."""
 
     frame: int = Field(description="Number of the tracked frame")
+    source_s: float = Field(description="Its time in the source: a video's time stamp (+ earlier loops), seconds")
     arrival_s: float = Field(description="When the frame arrived (read from the camera, or its time came due)")
     track_start_s: float = Field(description="When the tracker took it")
     tracked_s: float = Field(description="When its face frame was ready")
