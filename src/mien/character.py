@@ -13,8 +13,12 @@ of a crowd. Layers, added in this order into each (62,) face frame (see
    the basis is the EMFACS prototypes (AU channels, scaled by :func:`~mien.affect.basis.saturate`); with
    ``"feature_points"`` the emotion drives the 54 feature-point targets (:attr:`CharacterBatch.feature_weights`,
    metres) and leaves the AU channels alone.
-3. Laughter: the face clip of an active laugh or smile; while it plays, idle mouth motion yields.
-4. Idle: blinks (combined by max, so a blink still closes smiling eyes), micro random walks, gaze, wobble
+3. Speech (:meth:`CharacterBatch.say`, :class:`~mien.speech.batch.SpeechBatch`): the coarticulated visemes
+   take the lips' opening and rounding and the jaw by one rule (:func:`~mien.speech.arbitration.arbitrate`);
+   emotion keeps brows, lids, cheeks, lip corners and upper lip; a laugh interrupts speech (which keeps its
+   clock, in sync with its sound, and comes back after the laugh); idle mouth motion yields; blinks continue.
+4. Laughter: the face clip of an active laugh or smile; while it plays, idle mouth motion yields.
+5. Idle: blinks (combined by max, so a blink still closes smiling eyes), micro random walks, gaze, wobble
    (:class:`~mien.facs.idle.IdleBatch`).
 
 AU channels are then clipped to 0..5 (a live stream must not break on an over-driven sum: the clamp is
@@ -44,6 +48,8 @@ from mien.facs.envelope import Envelope
 from mien.facs.idle import IDLE_COLUMNS, IdleBatch, IdleSettings
 from mien.facs.intensity import AUSpec
 from mien.small_matmul import matmul_rows
+from mien.speech.batch import SpeechBatch
+from mien.speech.track import Utterance
 
 __all__ = ["EXPRESSION_BASES", "MAX_SEED", "Character", "CharacterBatch", "check_basis", "check_seed"]
 
@@ -193,6 +199,8 @@ class CharacterBatch:
         self.idle = IdleBatch(np.zeros(0, np.int64))
         """The idle layer (rows without idle have every part off)."""
         self.idle.add_rows(seeds_array.astype(np.uint64), settings)
+        self.speech = SpeechBatch(n)
+        """The speech layer (:meth:`say`); ``speech.viseme_weights`` (n, 15) for heads with viseme shapes."""
         self.seeds = seeds_array.astype(np.uint64)
         """(n,) uint64 seed of each row (idle behaviour and default laughter seed)."""
         self._active = np.ones(n, bool)
@@ -268,6 +276,7 @@ class CharacterBatch:
             self.facs.add_rows(1)
             self.emotions.add_rows(1)
             self.idle.add_rows(np.array([value]), settings, self.time_s)
+            self.speech.add_rows(1)
             self.seeds = np.concatenate([self.seeds, np.array([value], np.uint64)])
             self._active = np.append(self._active, False)
             self._features = np.append(self._features, False)
@@ -293,6 +302,7 @@ class CharacterBatch:
         self.facs.reset_rows(rows)
         self.emotions.reset_rows(rows)
         self.idle.reset_rows(rows, np.array([0]), None, self.time_s)
+        self.speech.reset_rows(rows)
         self._laughs.pop(index, None)
         self._performance.pop(index, None)
         self._active[index] = False
@@ -425,6 +435,24 @@ class CharacterBatch:
             self._start_clip(row, clips[row_seed], start_s)
         return next(iter(clips.values()))
 
+    def say(
+        self, rows: RowIndex, speech: Utterance | str, *, language: str = "en", start_s: float | None = None
+    ) -> Utterance:
+        """Say ``speech`` on ``rows`` now or from ``start_s``; returns the :class:`~mien.speech.track.Utterance`.
+
+        ``speech`` is an utterance (:mod:`mien.speech`: a timing file, OpenFaceFX track, audio) or text,
+        spoken by espeak-ng in ``language`` (its sound is in the returned utterance's ``audio``: play it from
+        the same start to stay in sync). It replaces what the rows were saying. See :mod:`mien.speech.arbitration`
+        for which channels speech takes.
+        """
+        ids = self._rows(rows)
+        if isinstance(speech, str):
+            from mien.speech.espeak import speak
+
+            speech = speak(speech, language)
+        self.speech.say(ids, speech, self.time_s if start_s is None else start_s)
+        return speech
+
     def play_clip(self, rows: RowIndex, clip: Clip, *, start_s: float | None = None) -> None:
         """Add a face clip (channels ⊂ FACE_CHANNELS: a laugh, an imported performance) as a layer on ``rows``."""
         ids = self._rows(rows)
@@ -486,6 +514,7 @@ class CharacterBatch:
             frames += saturate(expression)
         elif self._has_features:
             self.feature_weights[:] = 0.0
+        speaking = self.speech.apply(t, frames, self._laughs)  # before the laughs, which add on top
         laughing = None
         if self._laughs:
             laughing = np.zeros(self.n_characters, bool)
@@ -505,12 +534,16 @@ class CharacterBatch:
             if idle.moving:
                 values = frames[0].tolist()
                 mouth = max(0.0, 1.0 - max(0.0, *_MOUTH_OF(values)) / 2.0)
+                if speaking is not None:
+                    mouth *= 1.0 - float(speaking[0])
                 idle.apply_row(t, values, 0.0 if laughing is not None and laughing[0] else mouth)
                 frames[0, IDLE_COLUMNS] = _IDLE_VALUES(values)  # the rest of the row is unchanged
         else:
             mouth_scale = np.maximum(0.0, 1.0 - frames[:, _MOUTH].max(axis=1, initial=0.0) / 2.0)
             if laughing is not None:
                 mouth_scale[laughing] = 0.0
+            if speaking is not None:
+                mouth_scale *= 1.0 - speaking
             idle.apply(t, frames, mouth_scale)
         aus = frames[:, :_N_AU]
         np.maximum(aus, 0.0, out=aus)
@@ -638,6 +671,11 @@ class Character:
     ) -> Clip:
         """Play a laugh or smile (one of the 13 types); returns its face clip. The laugh drives the mouth."""
         return self.batch.laugh(0, laugh_type, intensity, duration_s=duration_s, seed=seed, start_s=start_s)
+
+    def say(self, speech: Utterance | str, *, language: str = "en", start_s: float | None = None) -> Utterance:
+        """Say an utterance or text (espeak-ng in ``language``) now or from ``start_s``; returns the utterance
+        (its ``audio`` is the sound to play from the same start)."""
+        return self.batch.say(0, speech, language=language, start_s=start_s)
 
     def play_clip(self, clip: Clip, *, start_s: float | None = None) -> None:
         """Add a face clip (channels ⊂ FACE_CHANNELS, e.g. a laugh or an imported performance) as a layer."""

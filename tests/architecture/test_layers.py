@@ -21,6 +21,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("mien.affect",),
     ("mien.plot",),
     ("mien.laughter",),
+    ("mien.speech",),
     ("mien.character",),
     ("mien.rig",),
     ("mien.render",),

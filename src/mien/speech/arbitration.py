@@ -1,0 +1,77 @@
+"""Who owns which face channel while a character speaks: the rule as data plus one function.
+
+``data/arbitration.csv`` lists, per AU, ``speech`` (speech owns it while speaking: the lips' opening and
+rounding and the jaw) or ``add`` (the other layers keep it and speech adds to it: the spread of E, I, SS over
+the emotion's lip corners); every channel it does not list (brows, lids, cheeks, nose, lip corners, the upper
+lip, blinks, head and gaze) stays the other layers' own. :func:`arbitrate` applies it.
+
+Around it, in :class:`~mien.speech.batch.SpeechBatch` and :meth:`mien.character.CharacterBatch.step`:
+laughter interrupts speech (the speech fades out over :data:`LAUGH_FADE_S` as a laugh starts and back in as
+it ends; the speech keeps its clock, so the mouth comes back in sync with the sound), idle mouth motion
+yields in proportion to the speaking presence, and blinks are applied after everything and always show.
+
+>>> [FACE_CHANNELS[i] for i in SPEECH_CHANNELS[:4]]
+['AU8', 'AU16L', 'AU16R', 'AU17']
+>>> face = np.zeros((1, len(SPEECH_CHANNELS))); face[0, list(SPEECH_CHANNELS).index(FACE_CHANNELS.index("AU25"))] = 1.5
+>>> out = arbitrate(face, np.zeros_like(face), np.array([1.0]))   # a bilabial closure over joy's parted lips
+>>> float(out.max())
+0.0
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mien.errors import InvalidValueError
+from mien.facs.catalogue import FACE_CHANNELS, au_channels
+from mien.fileio.tables import read_table, table_version
+
+__all__ = ["ARBITRATION_VERSION", "LAUGH_FADE_S", "REPLACES", "RULES", "SPEECH_CHANNELS", "arbitrate"]
+
+_TABLE = ("mien.speech", "data/arbitration.csv")
+
+LAUGH_FADE_S = 0.12
+"""Seconds over which speech fades out as a laugh starts (and back in as it ends)."""
+
+
+def _load() -> tuple[dict[str, str], np.ndarray, np.ndarray]:
+    rules: dict[str, str] = {}
+    channels: list[int] = []
+    replaces: list[float] = []
+    for row in read_table(*_TABLE):
+        if row["rule"] not in ("speech", "add"):
+            raise InvalidValueError("arbitration rule", row["rule"], "speech or add")
+        for channel in au_channels(int(row["au"])):
+            rules[FACE_CHANNELS[channel]] = row["rule"]
+            channels.append(channel)
+            replaces.append(1.0 if row["rule"] == "speech" else 0.0)
+    order = np.argsort(channels)
+    return rules, np.array(channels)[order], np.array(replaces)[order]
+
+
+_LOADED = _load()
+RULES: dict[str, str] = _LOADED[0]
+"""Face channel -> ``"speech"`` or ``"add"``; channels not listed are the other layers' own."""
+SPEECH_CHANNELS: np.ndarray = _LOADED[1]
+"""(k,) int positions in :data:`~mien.facs.catalogue.FACE_CHANNELS` that speech writes, ascending."""
+REPLACES: np.ndarray = _LOADED[2]
+"""(k,) 1.0 where speech owns the channel (``speech``), 0.0 where it adds (``add``)."""
+
+ARBITRATION_VERSION: str = table_version(*_TABLE)
+"""The ``# version:`` of the shipped arbitration table."""
+
+
+def arbitrate(face: np.ndarray, speech: np.ndarray, presence: np.ndarray) -> np.ndarray:
+    """Blend speech into the face on :data:`SPEECH_CHANNELS`: the one arbitration rule.
+
+    ``face`` (n, k): the other layers' values (FACS, emotion, mood) on those channels, AU intensity 0..5;
+    ``speech`` (n, k): the speech layer's values there, already weighted by how much speech holds the mouth
+    (``viseme weights @ viseme shapes``, 0 at rest); ``presence`` (n,): that hold, 0..1 (1 - weight of
+    ``sil``, times any laughter fade). Returns (n, k)::
+
+        owned ("speech"):  face * (1 - presence) + speech
+        shared ("add"):    face + speech
+
+    so a speaking mouth closes on /p b m/ whatever the emotion opened, and a silent one is the emotion's.
+    """
+    return face * (1.0 - presence[:, None] * REPLACES) + speech
