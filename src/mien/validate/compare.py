@@ -14,9 +14,14 @@ Two comparisons:
   frame times, rendered and detected again; the maps' correlation (per AU row and overall) measures how
   much of a performance survives the trip through the rig.
 
-The human side is tracked with :func:`mien.tracking.track_video` (MediaPipe in video mode, cached, short
-gaps filled); rendered frames go through a :class:`~mien.validate.detector.Detector` (MediaPipe in image
-mode by default). Frames without a face are left out of a map; its samples bridge them linearly.
+Both sides go through the capture path of ``mien capture`` (:mod:`mien.capture`): the human video is
+tracked with :func:`mien.tracking.track_video` (MediaPipe in video mode, cached) and captured by
+:func:`mien.capture.capture_track` (jitter filter, the performer's neutral from the first face seconds
+subtracted, the reverse AU mapping); the replay plays those captured face frames. Rendered frames go through
+a :class:`~mien.validate.detector.Detector` (MediaPipe in image mode by default) and their scores through the
+same :class:`~mien.capture.stream.CaptureStream`, with the character's own rendered neutral subtracted. Frames
+without a face are left out of a map; its samples bridge them linearly. The report's ``per_au_r`` is each AU's
+correlation over time between the person and the character's re-detected face.
 """
 
 from __future__ import annotations
@@ -35,9 +40,11 @@ from typing import Any
 import numpy as np
 
 from mien.affect.emotions import known_names, resolve_emotion
+from mien.capture import CaptureSettings, capture_frames, capture_track
+from mien.capture.stream import N_INPUT
 from mien.character import Character
 from mien.errors import InvalidValueError, MienError, UnknownNameError
-from mien.facs.catalogue import FACE_CHANNELS
+from mien.facs.catalogue import FACE_CHANNELS, au_channels
 from mien.facs.clip import Clip
 from mien.facs.envelope import Envelope
 from mien.facs.intensity import parse_au
@@ -286,6 +293,20 @@ def _check_video(track: Any, path: Path) -> None:
         )
 
 
+def _au_rows(frames: np.ndarray, aus: Sequence[int]) -> np.ndarray:
+    """(n, len(aus)) AU intensities of (n, 62) face frames (the mean of a lateral AU's two sides)."""
+    return np.stack([frames[:, list(au_channels(code))].mean(axis=1) for code in aus], axis=1)
+
+
+def _character_neutral(renderer: Any, detector: Any) -> np.ndarray:
+    """(55,) the character's rendered neutral as the detector reads it (subtracted like the performer's)."""
+    rgb, hint = renderer.render(np.zeros(len(FACE_CHANNELS)))
+    detection = detector.detect(rgb, hint)
+    if not detection.found or detection.blendshapes is None:  # no neutral to subtract
+        return np.zeros(N_INPUT)
+    return np.r_[np.asarray(detection.blendshapes, np.float64), np.zeros(3)]
+
+
 def _detected_aus(
     renderer: Any,
     detector: Any,
@@ -294,8 +315,14 @@ def _detected_aus(
     times_s: np.ndarray,
     desc: str,
     show_progress: bool,
+    settings: CaptureSettings | None = None,
+    neutral: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Render (n, 62) face frames, detect each; ``(aus (k, n_aus), times (k,))`` of the frames with a face."""
+    """Render (n, 62) face frames, detect each; ``(aus (k, n_aus), times (k,))`` of the frames with a face.
+
+    With ``settings`` the detected scores go through the capture path (filter, ``neutral`` subtracted, the
+    reverse AU mapping) as the performer's did; without, straight through ``solver``.
+    """
     scores: list[np.ndarray] = []
     kept: list[float] = []
     for frame, time_s in progress_bar(zip(frames, times_s, strict=True), len(frames), desc, show_progress):
@@ -309,7 +336,15 @@ def _detected_aus(
             f"{desc}: the detector found the character's face on only {len(kept)} of {len(frames)} rendered "
             f"frames (needs {MIN_FRAMES}); try another camera or a larger size"
         )
-    return solver.solve(np.stack(scores)), np.asarray(kept)
+    times = np.asarray(kept)
+    if settings is None:
+        return solver.solve(np.stack(scores)), times
+    n = len(kept)
+    fps = (n - 1) / max(float(times[-1] - times[0]), 1e-9)
+    captured = capture_frames(
+        desc, fps, times, np.stack(scores), np.zeros((n, 3)), np.ones(n, bool), settings, neutral=neutral
+    )
+    return _au_rows(captured.frames, solver.aus), times
 
 
 def run_compare(
@@ -367,11 +402,13 @@ def run_compare(
             str(path),
             f"a clip at least as long as the expression ({envelope.total_s:.2f} s); it lasts {duration_s:.2f} s",
         )
-    tracked = track.tracked
+    settings = CaptureSettings()
+    capture = capture_track(track, settings)  # the one capture path (`mien capture`)
+    tracked = capture.face_found
     human_times = track.timestamps_s[tracked]
     span = (float(track.timestamps_s[0]), float(track.timestamps_s[-1]))
-    human_channels = solver.solve_channels(track.blendshapes[tracked])
-    human_map = activation_map(solver.solve(track.blendshapes[tracked]), human_times, length, span)
+    human_frames = capture.frames[tracked]
+    human_map = activation_map(_au_rows(human_frames, solver.aus), human_times, length, span)
     timings["tracking"] = time.perf_counter() - mark
 
     own_detector = detector is None
@@ -381,10 +418,9 @@ def run_compare(
     try:
         with StimulusRenderer(rig, view, (int(size[0]), int(size[1]))) as renderer:
             mark = time.perf_counter()
-            frames = np.zeros((len(human_times), len(FACE_CHANNELS)))
-            frames[:, solver.channels] = human_channels  # the human's own sides, both halves of lateral AUs
+            neutral = _character_neutral(renderer, detector)
             replay_aus, replay_times = _detected_aus(
-                renderer, detector, solver, frames, human_times, "closed loop", progress
+                renderer, detector, solver, human_frames, human_times, "closed loop", progress, settings, neutral
             )
             closed = MapComparison(
                 "closed-loop",
@@ -404,8 +440,9 @@ def run_compare(
                 clip: Clip = character.run(duration_s, fps=track.fps)
                 times = track.timestamps_s
                 character_aus, character_times = _detected_aus(
-                    renderer, detector, solver, clip.sample(times - times[0]), times, expression, progress
-                )
+                    renderer, detector, solver, clip.sample(times - times[0]), times, expression, progress, settings,
+                    neutral,
+                )  # fmt: skip
                 expression_result = MapComparison(
                     expression,
                     solver.aus,
