@@ -228,6 +228,9 @@ CASES: list[Case] = [
     case("serve", "negative tick rate", "serve --tick-hz -5 --check", "-5"),
     case("serve", "bad port", "serve --udp-port -1 --check", "--udp-port", "-1"),
     case("serve", "port out of range", "serve --http-port 70000 --check", "--http-port", "70000"),
+    case("serve", "missing camera", "serve --capture /dev/video9 --check", "camera='/dev/video9'", "existing camera"),
+    case("serve", "capture no video", "serve --capture {d}/some_file.txt --check", "some_file.txt", "readable video"),
+    case("serve", "follow without a capture", "serve --follow a --check", "--follow", "--capture SOURCE"),
     # send
     case("send", "NaN intensity", "send --au AU12=nan", "AU12=nan"),
     case("send", "unreachable server", "send --au AU12=3 --ws --http-port 1", "127.0.0.1:1"),
