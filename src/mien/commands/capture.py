@@ -76,7 +76,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         type=_positive_hz,
         default=None,
         metavar="HZ",
-        help="jitter filter cut-off at rest (One Euro min cut-off, default 2.0 Hz)",
+        help="jitter filter cut-off at rest (One Euro min cut-off, default 1.0 Hz)",
     )
     parser.add_argument("--no-filter", action="store_true", help="no jitter filter (raw tracker scores)")
     parser.add_argument("--no-mask", action="store_true", help="leave out the face_found mask channel")
