@@ -163,7 +163,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"mien serve: characters {', '.join(ids)} at {args.tick_hz:g} Hz; Ctrl-C or SIGTERM stops", flush=True)
         if capture is not None:
             followers = ", ".join(capture.characters or ids[:1])
-            print(f"mien serve: {followers} follow {capture.source} (state: /api/capture)", flush=True)
+            print(f"mien serve: capture {capture.source} drives {followers} (state: /api/capture)", flush=True)
         if not is_loopback(args.host):
             print(f"mien serve: WARNING: listening beyond loopback; access token: {server.token}", flush=True)
         try:
