@@ -236,6 +236,20 @@ CASES: list[Case] = [
     case("send", "unreachable server", "send --au AU12=3 --ws --http-port 1", "127.0.0.1:1"),
     case("send", "NaN PAD", "send --pad nan 0 0", "nan"),
     case("send", "negative speed", "send --speed -1 --au AU12=1", "Speed=-1.0"),
+    # say
+    Case("say", "empty text", ("say", " ", "-o", "{d}/s.mp4"), ("text=' '", "empty")),
+    case("say", "nothing to say", "say -o {d}/s.mp4", "TEXT to say, a --timing file, or --audio"),
+    case("say", "language the TTS lacks", "say hello --language xx-nope -o {d}/s.mp4", "espeak-ng"),
+    case("say", "rate out of range", "say hello --rate 5 -o {d}/s.mp4", "rate_wpm=5", "80..450"),
+    case("say", "not an mp4", "say hello -o {d}/s.avi", "s.avi", ".mp4"),
+    case("say", "text and audio", "say hello --audio {d}/speech_noise.wav -o {d}/s.mp4", "--audio", "one of them"),
+    case("say", "timing overlaps", "say --timing {d}/overlap.csv -o {d}/s.mp4", "segment 2", "no overlap"),
+    case("say", "timing gap", "say --timing {d}/gap.json -o {d}/s.mp4", "segment 2", "no gap"),
+    case("say", "timing unknown units", "say --timing {d}/frames.csv -o {d}/s.mp4", "start_frames", "start_s,end_s"),
+    case("say", "timing unknown phoneme", "say --timing {d}/unknown.csv -o {d}/s.mp4", "unknown espeak phoneme 'Q!x'"),
+    case("say", "undecodable audio", "say --audio {d}/speech_noise.wav -o {d}/s.mp4", "speech_noise.wav", "decode"),
+    case("say", "missing timing file", "say --timing {d}/nope.json -o {d}/s.mp4", "nope.json"),
+    case("say", "unknown emotion", "say hello --emotion glee -o {d}/s.mp4", "unknown emotion 'glee'"),
     # study
     case("study", "missing design", "study stimuli {d}/desing.toml", "desing.toml"),
     case("study", "not a design", "study stimuli {d}/smile.csv", "smile.csv"),
@@ -288,6 +302,14 @@ def inputs(tmp_path: Path) -> Path:
     (tmp_path / "face.fbx").write_text("Kaydara FBX Binary\n")
     (tmp_path / "truncated.glb").write_bytes(b"glTF\x02\x00\x00\x00")
     (tmp_path / "text.glb").write_text("not a glTF file\n")
+    (tmp_path / "overlap.csv").write_text("start_s,end_s,espeak\n0,0.1,m\n0.05,0.2,a\n")
+    (tmp_path / "gap.json").write_text(
+        '{"alphabet": "viseme", "segments": [{"start_s": 0, "end_s": 0.1, "unit": "PP"}, '
+        '{"start_s": 0.3, "end_s": 0.4, "unit": "aa"}]}'
+    )
+    (tmp_path / "frames.csv").write_text("start_frames,end_frames,viseme\n0,3,PP\n")
+    (tmp_path / "unknown.csv").write_text("start_s,end_s,espeak\n0,0.1,m\n0.1,0.2,Q!x\n")
+    (tmp_path / "speech_noise.wav").write_bytes(b"RIFF\x10\x00\x00\x00WAVEjunk" + bytes(range(256)) * 4)
     return tmp_path
 
 

@@ -18,6 +18,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "capture",
     "learn",
     "laugh",
+    "say",
     "validate",
     "export",
     "import_",

@@ -8,6 +8,7 @@ documented fallback with no text: the jaw opens with the sound's energy and clos
 
 from __future__ import annotations
 
+import struct
 import subprocess
 import wave
 from pathlib import Path
@@ -24,6 +25,7 @@ __all__ = [
     "MAX_AUDIO_S",
     "SILENCE_DB",
     "energy_envelope",
+    "mux_audio",
     "read_audio",
     "utterance_from_audio",
 ]
@@ -47,7 +49,7 @@ def read_audio(path: str | Path) -> Audio:
         raise InvalidValueError("audio", str(path), "an existing sound file (WAV, MP3, OGG, FLAC...)")
     try:
         audio = _read_wav(source)
-    except (wave.Error, EOFError):
+    except (wave.Error, EOFError, RuntimeError, ValueError, struct.error):
         audio = _read_with_ffmpeg(source)
     if audio.samples.size == 0:
         raise InvalidValueError("audio", str(path), "a sound file with at least one sample")
@@ -132,3 +134,29 @@ def utterance_from_audio(audio: Audio | str | Path, fps: float = TRACK_FPS) -> U
     weights[:, VISEMES.index("aa")] = opening
     metadata: dict[str, object] = {} if isinstance(audio, Audio) else {"audio": str(audio)}
     return Utterance(VisemeTrack(weights, fps), (), sound, "", "audio", metadata)
+
+
+def mux_audio(video_path: str | Path, audio: Audio, out_path: str | Path) -> Path:
+    """Write ``out_path``: the H.264 video of ``video_path`` (copied, not re-encoded) with ``audio`` as AAC.
+
+    Both streams start at t = 0, the first frame and the first sample together (the AAC encoder's priming
+    delay is removed by the MP4 edit list ffmpeg writes). The output is written atomically; ffmpeg is
+    imageio-ffmpeg's (the ``render`` extra).
+    """
+    import tempfile
+
+    from mien.fileio.streams import atomic_path
+
+    executable = str(require("imageio_ffmpeg", "render").get_ffmpeg_exe())
+    target = Path(out_path)
+    with tempfile.TemporaryDirectory(prefix="mien-mux-") as folder:
+        wav = audio.write_wav(Path(folder) / "speech.wav")
+        with atomic_path(target) as temporary:
+            command = [executable, "-y", "-v", "error", "-nostdin", "-i", str(video_path), "-i", str(wav),
+                       "-map", "0:v:0", "-map", "1:a:0", "-c:v", "copy", "-c:a", "aac", "-b:a", "128k",
+                       "-movflags", "+faststart", "-f", "mp4", str(temporary)]  # fmt: skip
+            result = subprocess.run(command, capture_output=True, check=False, timeout=600)
+            if result.returncode != 0:
+                log = result.stderr.decode("utf-8", "replace").strip()
+                raise InvalidValueError("video", str(video_path), f"a video ffmpeg can mux with audio ({log})")
+    return target

@@ -10,11 +10,12 @@ exponentially outside it::
 
 and the mouth at t is the dominance-weighted mean of the segments' targets: the weight of viseme v is
 ``sum of D_s over its segments / sum of all D_s``. Cohen & Massaro use ``exp(-theta * |tau|^c)`` from the
-segment centre with c = 1 as the common case; measuring from the segment's edges keeps a long segment (a
-held vowel, a pause) at full strength inside, which mien prefers for TTS timings. alpha and theta per viseme
-are data (``data/visemes.csv``): labial closures dominate with a steep fall-off, so /p b m/ close the lips
-while the vowels around them stay open. Before the first and after the last segment the mouth rests (an
-implicit ``sil`` on each side).
+segment centre with c = 1 as the common case; measuring from the segment's edges keeps a long segment (a held
+vowel, a pause) at full strength inside, which mien prefers for TTS timings. alpha and theta per viseme are data
+(``data/visemes.csv``): labial closures dominate with a steep fall-off, so /p b m/ close the lips while the
+vowels around them stay open; a closure shorter than its viseme's ``min_s`` (a 25 ms /p/ from a TTS) spreads its
+dominance over ``min_s`` about its centre, so it shows on a video frame. Before the first and after the last
+segment the mouth rests (an implicit ``sil`` on each side).
 
 >>> track = coarticulate([Segment(0.0, 0.1, "aa"), Segment(0.1, 0.18, "PP"), Segment(0.18, 0.3, "aa")])
 >>> track.dominant()[5], track.dominant()[14], track.dominant()[24]
@@ -56,7 +57,9 @@ def coarticulate(segments: Sequence[Segment], fps: float = TRACK_FPS, duration_s
     end_s = segments[-1].end_s + TAIL_S if duration_s is None else float(duration_s)
     n = max(1, math.ceil(end_s * fps - 1e-9) + 1)
     times = np.arange(n) / fps
-    alpha, theta = viseme_dominance()
+    alpha, theta, min_s = viseme_dominance()
+    widen = np.maximum(0.0, min_s[ids] - (ends - starts)) / 2.0  # short closures held min_s about their centre
+    starts, ends = starts - widen, ends + widen
     distance = np.maximum(0.0, np.maximum(starts[None, :] - times[:, None], times[:, None] - ends[None, :]))
     dominance = alpha[ids] * np.exp(-theta[ids] * distance)
     weights = dominance @ np.eye(len(VISEMES))[ids]  # weights[:, v] = sum of the dominances of v's segments

@@ -97,15 +97,14 @@ def viseme_arkit() -> np.ndarray:
 
 
 @cache
-def viseme_dominance() -> tuple[np.ndarray, np.ndarray]:
-    """``(dominance (15,), rate_per_s (15,))``: Cohen & Massaro's alpha and theta per viseme (see
-    :mod:`mien.speech.coarticulation`)."""
+def viseme_dominance() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(dominance (15,), rate_per_s (15,), min_s (15,))``: Cohen & Massaro's alpha and theta per viseme and
+    the shortest time each shape is held, seconds (see :mod:`mien.speech.coarticulation`)."""
     rows = read_table(*_TABLE)
-    alpha = np.array([float(row["dominance"]) for row in rows])
-    theta = np.array([float(row["rate_per_s"]) for row in rows])
-    alpha.setflags(write=False)
-    theta.setflags(write=False)
-    return alpha, theta
+    columns = tuple(np.array([float(row[name]) for row in rows]) for name in ("dominance", "rate_per_s", "min_s"))
+    for column in columns:
+        column.setflags(write=False)
+    return columns[0], columns[1], columns[2]
 
 
 def rig_viseme_targets(target_names: Iterable[str]) -> dict[str, str]:
