@@ -195,8 +195,8 @@ def test_a_variable_frame_rate_plays_on_its_own_time_stamps(
 
     from mien.tracking.video import iter_frames
 
-    decoded = list(iter_frames(shared_data / "video" / "single_face.mp4"))[:24]
-    pts_ms = np.concatenate([[0], np.cumsum([(10, 50, 20, 80, 40)[i % 5] for i in range(len(decoded) - 1)])])
+    decoded = list(iter_frames(shared_data / "video" / "single_face.mp4"))[:20]
+    pts_ms = np.concatenate([[0], np.cumsum([(30, 110, 50, 160, 70)[i % 5] for i in range(len(decoded) - 1)])])
     vfr = tmp_path / "vfr.mp4"
     time_base = Fraction(1, 1000)
     with av.open(str(vfr), "w") as container:
@@ -213,8 +213,9 @@ def test_a_variable_frame_rate_plays_on_its_own_time_stamps(
     with _server(vfr, landmarker_path) as server:
         status = _wait(lambda: (s := _capture(server))["state"] == "ended" and s, 30.0, "the end of the video")
     source_ms = np.round(np.array([t["source_s"] for t in status["timings"]]) * 1000).astype(int)
-    assert len(source_ms) >= 12 and status["frames_read"] == len(decoded)
+    assert status["frames_read"] == len(decoded) and len(source_ms) >= 5  # (a busy tracker skips frames)
     assert set((source_ms - source_ms[0]).tolist()) <= set(pts_ms.tolist())  # its own time stamps, not i / rate
+    assert source_ms[-1] - source_ms[0] > 1000 * (len(decoded) - 1) / 30  # longer than at the average 30 fps
 
 
 @pytest.mark.parametrize(
