@@ -22,7 +22,7 @@ from mien.errors import MienError, UnknownNameError
 from mien.exchange.glb import head_glb_bytes
 from mien.server.guard import AccessPolicy, BodyTooLarge, BodyTooSlow, Guard, access_policy, read_body
 from mien.server.head_view import MEDIA_TYPES, referenced_files
-from mien.server.protocol import MessageRejected, frame_bytes, idle_parts, parse_message
+from mien.server.protocol import MAX_SAY_CHARS, MessageRejected, frame_bytes, idle_parts, parse_message
 from mien.server.registry import CharacterSpec, Entry
 from mien.server.running import RunningServer
 from mien.server.uploads import BODY_TIMEOUT_S, MAX_CLIP_BYTES, Uploads, UploadsBusy, check_suffix
@@ -202,6 +202,25 @@ class IdleCommand(_Body):
     neck: bool | None = None
     gaze: bool | None = None
     wobble: bool | None = None
+
+
+class SayCommand(_Body):
+    """Text to speak (espeak-ng, off the clock); the utterance starts at the first tick after it is spoken."""
+
+    text: str = Field(description=f"What to say, 1..{MAX_SAY_CHARS} characters")
+    language: str = Field("en", description="espeak-ng voice: en, en-us, de, fr...")
+    rate_wpm: int = Field(175, description="Speaking rate, words per minute (80..450)")
+
+
+class SpeechInfo(BaseModel):
+    """An utterance a character started (its sound at ``url``)."""
+
+    id: int = Field(description="Number of the utterance")
+    character: str
+    url: str = Field(description="Its sound, a WAV file")
+    start_s: float = Field(description="Server time of its first sample, seconds (the frames' time_s clock)")
+    duration_s: float = Field(description="Seconds of speech")
+    text: str
 
 
 class Accepted(BaseModel):
@@ -434,6 +453,32 @@ def create_app(server: RunningServer, access: AccessPolicy | None = None) -> Fas
     async def send_capture(character_id: str, body: CaptureCommand) -> Accepted:
         """Make the character follow the capture source (a second character mirrors the first) or stop."""
         return queue(character_id, {"capture": body.follow})
+
+    @app.post("/api/characters/{character_id}/say", response_model=Accepted, status_code=202, dependencies=api,
+              responses=_ERRORS)  # fmt: skip
+    async def send_say(character_id: str, body: SayCommand) -> Accepted:
+        """Speak ``text`` (espeak-ng in a worker thread, so the clock never waits); the character starts at the
+        first tick after, and its viewers are told where the sound is (docs/SERVER.md, Speech)."""
+        return queue(character_id, {"say": body.model_dump()})
+
+    @app.get("/api/characters/{character_id}/speech", response_model=SpeechInfo, dependencies=api,
+             responses=_ERRORS)  # fmt: skip
+    async def character_speech(character_id: str) -> SpeechInfo:
+        """The utterance the character is saying now (404: silent)."""
+        entry = entry_of(character_id)
+        spoken = registry.speech.playing(entry.spec.id, registry.time_s)
+        if spoken is None:
+            raise HTTPException(404, f"{entry.spec.id} is not speaking")
+        return SpeechInfo(**spoken.announcement()["speech"])
+
+    @app.get("/api/speech/{utterance_id}.wav", dependencies=api,
+             responses={**_ERRORS, 200: {"content": {"audio/wav": {}}}})  # fmt: skip
+    async def speech_sound(utterance_id: int) -> Response:
+        """The sound of utterance ``utterance_id`` (one of the newest 32), a 16-bit PCM mono WAV."""
+        spoken = registry.speech.get(utterance_id)
+        if spoken is None:
+            raise HTTPException(404, f"no utterance {utterance_id} (only the newest are kept)")
+        return Response(spoken.wav, media_type="audio/wav")
 
     @app.get("/api/capture", response_model=CaptureStatus, dependencies=api, responses=_ERRORS)
     async def capture_status() -> CaptureStatus:

@@ -18,6 +18,8 @@ key                meaning
 ``laugh``          a laugh type (``"laughter"``), with ``intensity`` 0..5 (default 1)
 ``idle``           ``true``/``false`` (all idle behaviour on/off) or ``{"blink": false, "gaze": true, ...}``
 ``capture``        ``true``/``false``: follow the server's capture source (``mien serve --capture``) or stop
+``say``            text to speak (espeak-ng), or ``{"text": "...", "language": "en", "rate_wpm": 175}``; at most
+                   :data:`MAX_SAY_CHARS` characters (a UDP datagram: :data:`MAX_MESSAGE_BYTES` bytes)
 ``character``      the character id (default: the first character)
 ``watch``          WebSocket only: switch the stream to this character id
 =================  =====================================================================================
@@ -69,6 +71,7 @@ __all__ = [
     "FRAME_MAGIC",
     "FRAME_VERSION",
     "MAX_MESSAGE_BYTES",
+    "MAX_SAY_CHARS",
     "N_AU_CHANNELS",
     "OPENFACS_KEYS",
     "Frame",
@@ -76,6 +79,7 @@ __all__ = [
     "MessageRejected",
     "PlayRequest",
     "Rejection",
+    "SayRequest",
     "decode_frame",
     "encode_frame",
     "frame_bytes",
@@ -85,6 +89,10 @@ __all__ = [
 
 MAX_MESSAGE_BYTES = 1024
 """Largest accepted message in bytes (the original OpenFACS server reads at most 1024 bytes a datagram)."""
+
+MAX_SAY_CHARS = 400
+"""Longest text of a ``say`` command, characters (about 25 s of speech at 175 words per minute): speech is
+synthesised off the clock, but a long text holds the one TTS worker and its sound is kept in memory."""
 
 OPENFACS_KEYS: tuple[str, ...] = (*(f"AU{code}" for code in OPENFACS_AUS), "Speed")
 """The keys of an OpenFACS message, in the order its client sends them."""
@@ -115,7 +123,7 @@ AU_CHANNELS: dict[str, tuple[int, ...]] = {
 """
 
 _EXTENSION_KEYS = frozenset(
-    {"Speed", "speeds", "tau_s", "play", "emotion", "intensity", "pad", "laugh", "idle", "capture"}
+    {"Speed", "speeds", "tau_s", "play", "emotion", "intensity", "pad", "laugh", "idle", "capture", "say"}
     | {"character", "watch"}
 )
 _OPENFACS_FAST_KEYS = AU_KEYS | {"Speed", "character"}
@@ -137,6 +145,10 @@ class Rejection(enum.StrEnum):
     UNKNOWN_CHARACTER = "unknown_character"
     MISSING_EXTRA = "missing_extra"
     NO_CAPTURE = "no_capture"
+    TOO_LONG = "too_long"
+    UNKNOWN_LANGUAGE = "unknown_language"
+    NO_TTS = "no_tts"
+    SPEECH_BUSY = "speech_busy"
     ENGINE_ERROR = "engine_error"
     INTERNAL_ERROR = "internal_error"
 
@@ -167,6 +179,18 @@ class PlayRequest:
 
 
 @dataclass(frozen=True)
+class SayRequest:
+    """Text for the character to speak (espeak-ng, off the clock; :mod:`mien.server.speech`)."""
+
+    text: str
+    """What to say, 1..:data:`MAX_SAY_CHARS` characters."""
+    language: str = "en"
+    """espeak-ng voice (``en``, ``en-us``, ``de``...)."""
+    rate_wpm: int = 175
+    """Speaking rate, words per minute (80..450)."""
+
+
+@dataclass(frozen=True)
 class Message:
     """One parsed message. ``None`` fields were not in the message."""
 
@@ -193,6 +217,8 @@ class Message:
     """Idle switches to change, ``((part, on), ...)`` over :func:`idle_parts` (``true``/``false``: all parts)."""
     capture: bool | None = None
     """Follow the server's capture source (True) or stop (False)."""
+    say: SayRequest | None = None
+    """Text to speak."""
     character: str | None = None
     """Target character id; None = the default (first) character, or the one a WebSocket watches."""
     watch: str | None = None
@@ -219,6 +245,7 @@ class Message:
             or self.play is not None
             or self.idle is not None
             or self.capture is not None
+            or self.say is not None
         )
 
 
@@ -305,6 +332,32 @@ def _idle(value: Any) -> tuple[tuple[str, bool], ...]:
             raise MessageRejected(Rejection.WRONG_TYPE, f"idle[{part}]={on!r} must be true or false"[:200])
         switches.append((part, on))
     return tuple(switches)
+
+
+_LANGUAGE = re.compile(r"^[A-Za-z]{2,3}(-[A-Za-z0-9]{1,8}){0,3}$")
+
+
+def _say(value: Any) -> SayRequest:
+    """``"text"`` or ``{"text", "language", "rate_wpm"}`` -> a :class:`SayRequest` (the language's voice is
+    checked where the TTS runs: :meth:`mien.server.speech.SpeechService.check`)."""
+    parts = {"text": value} if isinstance(value, str) else value
+    if not isinstance(parts, dict):
+        raise MessageRejected(Rejection.WRONG_TYPE, f"say={value!r} must be text or an object with text"[:200])
+    unknown = set(parts) - {"text", "language", "rate_wpm"}
+    if unknown:
+        raise MessageRejected(Rejection.UNKNOWN_FIELD, f"say has unknown keys {sorted(unknown)}"[:200])
+    text = _name("say.text", parts.get("text"))
+    if len(text) > MAX_SAY_CHARS:
+        raise MessageRejected(Rejection.TOO_LONG, f"say.text has {len(text)} characters > {MAX_SAY_CHARS}")
+    if not text.strip():
+        raise MessageRejected(Rejection.OUT_OF_RANGE, "say.text is empty: give some text to speak")
+    language = _name("say.language", parts.get("language", "en"))
+    if not _LANGUAGE.match(language):
+        raise MessageRejected(Rejection.UNKNOWN_LANGUAGE, f"say.language={language[:40]!r} is no voice name (en, de)")
+    rate = parts.get("rate_wpm", 175)
+    if type(rate) is not int or not 80 <= rate <= 450:
+        raise MessageRejected(Rejection.OUT_OF_RANGE, f"say.rate_wpm={rate!r}: words per minute, an integer 80..450")
+    return SayRequest(text, language, rate)
 
 
 def _character(key: str, value: Any) -> str:
@@ -406,6 +459,8 @@ def parse_message(data: bytes | str, max_bytes: int = MAX_MESSAGE_BYTES) -> Mess
             if not isinstance(value, bool):
                 raise MessageRejected(Rejection.WRONG_TYPE, f"capture={value!r} must be true or false"[:200])
             fields["capture"] = value
+        elif key == "say":
+            fields["say"] = _say(value)
         elif key in ("emotion", "laugh"):
             fields[key] = _name(key, value)
         elif key == "intensity":

@@ -39,6 +39,7 @@ from mien.laughter.names import LAUGH_TYPES
 from mien.rig.driver import RigDriver
 from mien.server.head_view import HeadView, frame_weights, head_view
 from mien.server.protocol import AU_CHANNELS, N_AU_CHANNELS, Message, MessageRejected, Rejection, idle_parts
+from mien.server.speech import SpeechService
 from mien.server.stats import Counters, RateLimitedLog
 
 __all__ = ["MAX_EVENTS_PER_CHARACTER", "MAX_QUARANTINE_TRIALS", "CharacterSpec", "Entry", "Registry"]
@@ -132,6 +133,8 @@ class Registry:
         self.capture: Any = None
         """The server's :class:`~mien.server.capture_source.CaptureSource` (``mien serve --capture``), or None: what a
         ``{"capture": true}`` message makes a character follow."""
+        self.speech = SpeechService()
+        """The TTS worker of ``say`` commands and the utterances' sounds (:mod:`mien.server.speech`)."""
         self.lock = threading.RLock()
         """Held by each tick and each change (add, remove, submit), so changes from any thread land between ticks."""
         self._rigs: dict[tuple[str, str | None, bool], tuple[Any, Any]] = {}
@@ -228,6 +231,7 @@ class Registry:
         one laugh on a scratch batch (imports the laughter extra and fills its caches: about 0.3-0.5 s cold,
         1-5 ms after). Without the laughter extra, laugh messages are rejected on arrival from now on
         (:attr:`missing`). The characters' heads are loaded by :meth:`add`."""
+        self.speech.warm_up()  # libespeak-ng and its voices load once, before the clock
         scratch = CharacterBatch(1, idle=False)
         try:
             scratch.laugh(0, LAUGH_TYPES[1])
@@ -252,6 +256,9 @@ class Registry:
             raise MessageRejected(Rejection.MISSING_EXTRA, f"laugh={message.laugh!r}: {self.missing['laugh']}")
         if message.capture and self.capture is None:
             raise MessageRejected(Rejection.NO_CAPTURE, "capture=true: this server has no capture source (--capture)")
+        if message.say is not None:  # spoken off the clock; started by the first tick after (apply_pending)
+            self.speech.check(message.say)
+            self.speech.request(entry.spec.id, message.say)
         with self.lock:
             if message.aus is not None:
                 if entry.state is not None:
@@ -363,6 +370,7 @@ class Registry:
                 busy.append(entry)
         if states:
             self._apply_states(states)  # events touch no held target, so the states can all go first
+        self.speech.deliver(partial(self._start_speech, t_s), self.reject, t_s)
         for entry in busy:
             while entry.events:
                 message = entry.events.popleft()
@@ -370,6 +378,18 @@ class Registry:
             while entry.clips:
                 clip = entry.clips.pop(0)
                 self._guarded(entry, False, partial(self.batch.play_clip, entry.row, clip, start_s=t_s))
+
+    def _start_speech(self, t_s: float, character_id: str, utterance: Any) -> bool:
+        """Start ``utterance`` on ``character_id``'s row at ``t_s`` (False: no such character, or refused)."""
+        entry = self.entries.get(character_id)
+        if entry is None:
+            return False
+        try:
+            self.batch.say(entry.row, utterance, start_s=t_s)
+        except MienError as exc:
+            self.reject(MessageRejected(Rejection.ENGINE_ERROR, f"{character_id}: say: {exc}"))
+            return False
+        return True
 
     def _apply_performance(self, entry: Entry) -> None:
         """Give ``entry``'s row the newest frame of the performance it follows (a new one only: the batch holds it)."""

@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import json
 import logging
 import time
+from collections import deque
 from typing import Any
 
 from mien.errors import InvalidValueError
@@ -46,6 +48,8 @@ class Viewer:
         """Newest frame not yet sent."""
         self.ready = asyncio.Event()
         """Set when :attr:`latest` holds a frame."""
+        self.texts: deque[str] = deque(maxlen=16)
+        """JSON text messages not yet sent (speech announcements: :mod:`mien.server.speech`), sent before frames."""
 
 
 class Hub:
@@ -72,6 +76,25 @@ class Hub:
         self._round = 0  # ticks handed to the hub; a viewer's turn is when (slot + round) % stride == 0
         self._slots = 0
         self._log = RateLimitedLog(prefix="viewer refused")
+        registry.speech.listeners.append(self.announce)
+
+    def announce(self, spoken: Any) -> None:
+        """Tell the viewers of ``spoken.character`` that it starts an utterance (a JSON text message with the
+        sound's URL and its start on the server clock: :meth:`mien.server.speech.Spoken.announcement`)."""
+        text: str | None = None
+        for viewer in self.viewers:
+            if (viewer.watching or self.registry.default_id) == spoken.character:
+                text = text or json.dumps(spoken.announcement())
+                viewer.texts.append(text)
+                viewer.ready.set()
+
+    def _greet(self, viewer: Viewer) -> None:
+        """Tell a viewer that starts watching a character what it is saying now, if anything."""
+        watching = viewer.watching or self.registry.default_id
+        spoken = self.registry.speech.playing(watching, self.registry.time_s) if watching is not None else None
+        if spoken is not None:
+            viewer.texts.append(json.dumps(spoken.announcement()))
+            viewer.ready.set()
 
     def _pace(self, tick: int, t_s: float) -> None:
         """Adapt :attr:`stride` to how late this tick reached the hub: doubled when ticks keep running late while
@@ -149,6 +172,7 @@ class Hub:
         viewer = Viewer(watching, self._slots)
         self._slots += 1
         self.viewers.add(viewer)
+        self._greet(viewer)
         sender = asyncio.create_task(self._send(websocket, viewer))
         try:
             await self._receive(websocket, viewer)
@@ -163,6 +187,8 @@ class Hub:
             while True:
                 await viewer.ready.wait()
                 viewer.ready.clear()
+                while viewer.texts:
+                    await websocket.send_text(viewer.texts.popleft())
                 data, viewer.latest = viewer.latest, None
                 if data is not None:
                     begin = time.perf_counter()
@@ -197,6 +223,7 @@ class Hub:
                     if message.watch not in self.registry.entries:
                         raise MessageRejected(Rejection.UNKNOWN_CHARACTER, f"watch={message.watch!r} does not exist")
                     viewer.watching = message.watch
+                    self._greet(viewer)
                 if message.aus is not None or message.has_events:
                     self.registry.submit(message, default=viewer.watching)
             except MessageRejected as exc:
