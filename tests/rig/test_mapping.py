@@ -41,7 +41,7 @@ def mapping() -> AUMapping:
 
 
 def test_default_table_shape_and_version(mapping: AUMapping) -> None:
-    assert mapping.version == "2"
+    assert mapping.version == "3"
     assert mapping.target_names == ARKIT_NAMES
     assert mapping.matrix.shape == (62, 52) and mapping.matrix.dtype == np.float32
     pose_rows = [channel_index(name) for name in POSE_CHANNELS]
@@ -80,7 +80,7 @@ def test_sides(mapping: AUMapping) -> None:
 def test_linear_in_intensity_and_clipped(mapping: AUMapping) -> None:
     names = mapping.target_names
     half = mapping.to_weights(_frame(12, intensity=2.5))
-    assert half[names.index("mouthSmileLeft")] == pytest.approx(0.5)
+    assert half[names.index("mouthSmileLeft")] == pytest.approx(1.25 * 2.5 / 5)  # 1.25 at E, linear below the clip
     assert mapping.to_weights(_frame(12, intensity=2.5)).max() <= 1.0
     both = mapping.to_weights(_frame(43, 45, 46))  # three AUs summing past 1 on eyeBlink
     assert both[names.index("eyeBlinkLeft")] == 1.0
