@@ -120,13 +120,17 @@ CASES: list[Case] = [
     # assets
     case("assets", "unknown asset", "assets fetch ict-facekti", "ict-facekti", "ict-facekit"),
     case("assets", "zero timeout", "assets fetch ict-facekit --timeout 0", "--timeout", "'0'"),
-    case("assets", "bad hash", "assets fetch ict-facekit --sha256 xyz -o {d}/ict", "sha256='xyz'", "64 hex"),
+    case("assets", "no longer an option", "assets fetch ict-facekit --sha256 00 -o {d}/ict", "--sha256"),
+    case("assets", "not a URL", "assets fetch ict-facekit --url 127.0.0.1:1/ict -o {d}/ict", "127.0.0.1:1/ict", "http"),
+    case("assets", "destination under a file", f"assets fetch ict-facekit -o {UNDER_FILE}", "some_file.txt is a file"),
+    case("assets", "destination exists", "assets fetch ict-facekit -o {d}/some_file.txt", "some_file.txt", "--force"),
     case(
         "assets",
         "unreachable URL",
-        "assets fetch ict-facekit --url http://127.0.0.1:1/x.zip -o {d}/ict",
-        "127.0.0.1:1",
+        "assets fetch ict-facekit --url http://127.0.0.1:1/ict -o {d}/ict",
+        "127.0.0.1:1/ict/LICENSE",
         "--url",
+        "nothing was installed",
     ),
     # track
     # head

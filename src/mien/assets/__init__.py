@@ -1,9 +1,29 @@
-"""Installing assets from their public homes: ``mien assets fetch`` (download, verify, unpack atomically).
+"""Installing assets from their public homes: ``mien assets fetch`` (the files mien reads, one by one at a pinned
+commit, each checked against a shipped SHA-256 list, resumable, installed atomically).
 
-The sources (URL, expected SHA-256, licence) are data, in ``data/sources.toml``; :mod:`mien.paths` finds an
-installed asset in :func:`mien.paths.installed_path`. Importing this package needs the standard library only.
+The sources (repository, commit, base URL, hash list, licence) are data, in ``data/sources.toml``;
+:mod:`mien.paths` finds an installed asset in :func:`mien.paths.installed_path`. Importing this package needs
+the standard library only.
 """
 
-from mien.assets.fetch import SOURCES, AssetSource, fetch_asset, load_sources
+from mien.assets.fetch import (
+    SOURCES,
+    AssetSource,
+    FetchError,
+    fetch_asset,
+    file_hashes,
+    files_to_fetch,
+    load_sources,
+    staging_folder,
+)
 
-__all__ = ["SOURCES", "AssetSource", "fetch_asset", "load_sources"]
+__all__ = [
+    "SOURCES",
+    "AssetSource",
+    "FetchError",
+    "fetch_asset",
+    "file_hashes",
+    "files_to_fetch",
+    "load_sources",
+    "staging_folder",
+]

@@ -1,33 +1,64 @@
-"""Download an asset archive, check its SHA-256 and unpack it atomically where :mod:`mien.paths` looks.
+"""Install an asset from its public home, file by file at a pinned commit (``mien assets fetch``).
 
-Nothing half-written is ever left: the archive is streamed into a temporary folder beside the destination,
-hashed while it streams, refused on a hash mismatch, unpacked and checked there, and only then renamed into
-place (one ``rename`` on the same file system). Any failure removes the temporary folder.
+Each source (``data/sources.toml``) names a repository, one commit, the base URL that serves that commit's
+files and the SHA-256 of every file at that commit (a ``sha256sum`` list shipped beside it). Only the files
+mien reads are fetched: what the asset's loader finds missing in an empty folder (the loader stays the one
+home of that list) plus the source's extra files (its licence).
+
+Nothing is ever half-installed. Files stream into a staging folder beside the destination
+(``.NAME.partial``), each as ``FILE.part``, renamed to ``FILE`` once its SHA-256 matches the list; the staging
+folder becomes the destination (one ``rename`` on the same file system) only when every file is there. An
+interruption (a cut connection, a timeout, an HTTP 5xx, Ctrl-C) keeps the verified files and the partial one:
+the same command resumes, asking for the rest of the partial file with an HTTP ``Range`` request. A failure
+that retrying cannot mend (bytes that differ from the recorded hash, an HTTP 4xx, a write error such as a full
+disk) removes the staging folder: nothing is left behind.
 """
 
 from __future__ import annotations
 
+import http.client
 import math
 import os
 import re
+import shutil
 import tempfile
 import tomllib
-import zipfile
-from collections.abc import Callable, Iterator
+import urllib.error
+import urllib.request
+from collections.abc import Iterator
 from dataclasses import dataclass
 from importlib import resources
-from pathlib import Path, PurePosixPath
-from typing import Any
+from pathlib import Path
 
-from mien.errors import InvalidValueError, UnknownNameError
+from mien.errors import InvalidValueError, MienError, UnknownNameError
 from mien.fileio.hashing import file_sha256
 from mien.paths import installed_path
 from mien.progress import progress
 
-__all__ = ["CHUNK_BYTES", "SOURCES", "AssetSource", "fetch_asset", "load_sources"]
+__all__ = [
+    "CHUNK_BYTES",
+    "SOURCES",
+    "TICK_BYTES",
+    "AssetSource",
+    "FetchError",
+    "fetch_asset",
+    "file_hashes",
+    "files_to_fetch",
+    "load_sources",
+    "staging_folder",
+]
 
-CHUNK_BYTES = 1 << 20
-"""Download block size, bytes (one progress step)."""
+CHUNK_BYTES = 1 << 16
+"""Bytes read from the network at a time."""
+
+TICK_BYTES = 1 << 20
+"""Bytes per step of the progress bar (1 MiB)."""
+
+_MIB = 1024**2
+
+
+class FetchError(MienError):
+    """A download failed; the message names the file, what happened and what to do."""
 
 
 @dataclass(frozen=True)
@@ -38,146 +69,258 @@ class AssetSource:
     """Name on the command line (``ict-facekit``)."""
     asset: str
     """Its name in :data:`mien.paths.ASSETS` (``ict_facekit``)."""
-    url: str
-    """Default download URL of the zip archive."""
-    sha256: str
-    """Expected SHA-256 of the archive, lower-case hex; empty when no maintainer has recorded it yet."""
     licence: str
     """Licence of the asset."""
-    marker: str
-    """Relative path (POSIX) that marks the asset's root folder inside the archive."""
+    repository: str
+    """The repository's home page."""
+    commit: str
+    """The pinned commit (40 hex digits)."""
+    base_url: str
+    """URL that serves the commit's files: ``FILE`` comes from ``base_url/FILE`` (no trailing slash)."""
+    hashes: str
+    """File name, in ``mien/assets/data``, of the ``sha256sum`` list of the files at ``commit``."""
+    extra_files: tuple[str, ...]
+    """Files fetched besides the ones the loader reads (the licence), relative POSIX paths."""
+    download_bytes: int
+    """Total size of the fetched files at ``commit``, bytes."""
 
 
 def load_sources() -> dict[str, AssetSource]:
     """Read ``data/sources.toml``: command-line name -> :class:`AssetSource`."""
     text = resources.files("mien.assets").joinpath("data/sources.toml").read_text(encoding="utf-8")
-    return {name: AssetSource(name=name, **table) for name, table in tomllib.loads(text).items()}
+    sources = {}
+    for name, table in tomllib.loads(text).items():
+        fields = {**table, "extra_files": tuple(table.get("extra_files", ()))}
+        fields["base_url"] = fields["base_url"].format(commit=fields["commit"]).rstrip("/")
+        sources[name] = AssetSource(name=name, **fields)
+    return sources
 
 
 SOURCES: dict[str, AssetSource] = load_sources()
 """The fetchable assets, from ``data/sources.toml``."""
 
 
-def _check_sha256(text: str | None) -> str:
-    value = (text or "").strip().lower()
-    if value and not re.fullmatch(r"[0-9a-f]{64}", value):
-        raise InvalidValueError("sha256", text, "64 hexadecimal digits")
-    return value
+def file_hashes(source: AssetSource) -> dict[str, str]:
+    """Relative POSIX path -> lower-case hex SHA-256 of every file of ``source`` at its commit, read from the
+    shipped ``sha256sum`` list (``#`` lines are comments)."""
+    text = resources.files("mien.assets").joinpath("data", source.hashes).read_text(encoding="utf-8")
+    table = {}
+    for number, line in enumerate(text.splitlines(), 1):
+        if not line.strip() or line.startswith("#"):
+            continue
+        match = re.fullmatch(r"([0-9a-fA-F]{64}) [ *](\S.*)", line.strip())
+        if match is None:
+            raise InvalidValueError(f"{source.hashes} line {number}", line, "'<64 hex digits>  <path>'")
+        table[match[2]] = match[1].lower()
+    return table
 
 
-def _chunks(response: Any) -> Iterator[bytes]:
-    while block := response.read(CHUNK_BYTES):
-        yield block
+def files_to_fetch(source: AssetSource) -> tuple[str, ...]:
+    """The files of ``source`` mien reads, relative POSIX paths in download order: the extra files (licence),
+    then what the asset's loader finds missing in an empty folder."""
+    loader: list[str] = []
+    if source.asset == "ict_facekit":
+        from mien.rig.ict_facekit import ict_missing_files
+
+        with tempfile.TemporaryDirectory(prefix="mien-empty-") as empty:
+            (Path(empty) / "FaceXModel").mkdir()
+            loader = ict_missing_files(empty)
+    return (*source.extra_files, *(name for name in loader if name not in source.extra_files))
 
 
-def _download(url: str, target: Path, show_progress: bool, timeout_s: float, label: str) -> str:
-    """Stream ``url`` into ``target``; returns the SHA-256 hex digest of what was written."""
-    import urllib.error
-    import urllib.request
+def staging_folder(target: Path) -> Path:
+    """The folder beside ``target`` where a fetch downloads before it renames (kept to resume after a cut)."""
+    return target.parent / f".{target.name}.partial"
 
-    if not re.match(r"(?i)^(https?|file)://", url):
-        raise InvalidValueError("url", url, "an http://, https:// or file:// URL")
-    request = urllib.request.Request(url, headers={"User-Agent": "mien-assets-fetch"})
+
+class _Cut(Exception):
+    """The transfer stopped early; retrying can finish it (the staging folder is kept)."""
+
+
+class _Fatal(Exception):
+    """Retrying cannot mend it (the staging folder is removed)."""
+
+
+def _check_base_url(url: str) -> str:
+    if not re.match(r"(?i)^(https?|file)://\S+$", url):
+        raise InvalidValueError("url", url, "an http://, https:// or file:// URL of the folder that serves the files")
+    return url.rstrip("/")
+
+
+def _stream(url: str, part: Path, timeout_s: float) -> Iterator[int]:
+    """Download ``url`` into ``part``, continuing after its present bytes with a Range request; yields the
+    bytes written per block. Raises :class:`_Cut` on a body shorter than announced."""
+    offset = part.stat().st_size if part.exists() else 0
+    headers = {"User-Agent": "mien-assets-fetch"}
+    if offset:
+        headers["Range"] = f"bytes={offset}-"
     try:
-        with urllib.request.urlopen(request, timeout=timeout_s) as response, target.open("wb") as handle:
-            length = int(response.headers.get("Content-Length") or 0) if hasattr(response, "headers") else 0
-            total = math.ceil(length / CHUNK_BYTES) if length else None
-            size = f" ({length / 1024**2:.0f} MiB)" if length else ""
-            for block in progress(_chunks(response), total=total, desc=f"downloading {label}{size}",
-                                  enabled=show_progress):  # fmt: skip
-                handle.write(block)
+        response = urllib.request.urlopen(urllib.request.Request(url, headers=headers), timeout=timeout_s)
     except urllib.error.HTTPError as exc:
-        raise InvalidValueError("url", url, f"a downloadable archive (the server answered HTTP {exc.code} "
-                                f"{exc.reason}); check the address or pass another with --url") from None  # fmt: skip
+        if exc.code == 416 and offset:  # the partial file is already whole: its hash decides
+            return
+        raise
+    with response:
+        status = getattr(response, "status", None) or 200
+        if status == 206 and not str(response.headers.get("Content-Range", "")).startswith(f"bytes {offset}-"):
+            raise _Cut(f"the server answered another byte range than {offset}-")
+        if status != 206:
+            offset = 0  # the server sent the whole file (it ignores Range): start again
+        length = response.headers.get("Content-Length")
+        expected = offset + int(length) if length and length.isdigit() else None
+        written = offset
+        try:  # unbuffered: a write error (a full disk) surfaces at its write, never later at close
+            handle = part.open("ab" if offset else "wb", buffering=0)
+        except OSError as exc:
+            raise _Fatal(f"could not write {part} ({exc.strerror or exc})") from None
+        with handle:
+            while block := response.read(CHUNK_BYTES):
+                view = memoryview(block)
+                try:
+                    while view:
+                        view = view[handle.write(view) :]
+                except OSError as exc:
+                    raise _Fatal(f"could not write {part} ({exc.strerror or exc})") from None
+                written += len(block)
+                yield len(block)
+        if expected is not None and written < expected:
+            raise _Cut(f"the connection closed after {written:,} of {expected:,} bytes")
+
+
+def _fetch_one(url: str, staging: Path, path: str, sha256: str, commit: str, timeout_s: float) -> Iterator[int]:
+    """Download one file into ``staging/path`` (via ``.part``), check its hash, rename it; yields bytes."""
+    final = staging / path
+    part = final.with_name(final.name + ".part")
+    try:
+        final.parent.mkdir(parents=True, exist_ok=True)
+        yield from _stream(url, part, timeout_s)
+    except urllib.error.HTTPError as exc:
+        what = f"{path}: the server answered HTTP {exc.code} {exc.reason} for {url}"
+        if exc.code >= 500 or exc.code in (408, 429):
+            raise _Cut(what) from None
+        raise _Fatal(
+            f"{what}; check --url (a mirror must serve commit {commit[:7]}'s files at the same paths)"
+        ) from None
     except urllib.error.URLError as exc:
         reason = getattr(exc.reason, "strerror", None) or str(exc.reason)
-        raise InvalidValueError(
-            "url", url, f"a reachable server ({reason}); check the network or pass another address with --url"
-        ) from None
-    except (TimeoutError, ConnectionError) as exc:
-        raise InvalidValueError("url", url, f"a server that answers ({exc}); try again or pass --url") from None
-    return file_sha256(target)
-
-
-def _unpack(archive: Path, folder: Path, marker: str, url: str) -> Path:
-    """Extract ``archive`` into ``folder`` (refusing unsafe names); returns the folder that holds ``marker``."""
+        raise _Cut(f"could not reach {url} ({reason}); check the network or the address (--url)") from None
+    except (TimeoutError, ConnectionError, http.client.HTTPException) as exc:
+        raise _Cut(f"{path}: the transfer from {url} failed ({exc or type(exc).__name__})") from None
+    except _Cut as exc:
+        raise _Cut(f"{path}: {exc} ({url})") from None
+    except OSError as exc:  # the staging folder itself (mkdir)
+        raise _Fatal(f"could not write {final.parent} ({exc.strerror or exc})") from None
+    measured = file_sha256(part)
+    if measured != sha256:
+        raise _Fatal(
+            f"{path} from {url} has SHA-256 {measured}, not the {sha256} recorded for commit {commit[:7]}: "
+            "the server does not serve that commit's file (check --url)"
+        )
     try:
-        with zipfile.ZipFile(archive) as package:
-            for member in package.namelist():
-                parts = PurePosixPath(member).parts
-                if member.startswith(("/", "\\")) or ".." in parts or (parts and ":" in parts[0]):
-                    raise InvalidValueError("archive member", member, "a relative path inside the archive")
-            package.extractall(folder)
-    except zipfile.BadZipFile as exc:
-        raise InvalidValueError("archive", url, f"a zip archive ({exc})") from None
-    candidates = [folder, *sorted(p for p in folder.iterdir() if p.is_dir())]
-    for root in candidates:
-        if (root / marker).is_file():
-            return root
-    raise InvalidValueError("archive", url, f"an archive holding {marker} (at its top or in one top folder)")
+        part.rename(final)
+    except OSError as exc:
+        raise _Fatal(f"could not write {final} ({exc.strerror or exc})") from None
+
+
+def _ticks(blocks: Iterator[int]) -> Iterator[None]:
+    """One item per :data:`TICK_BYTES` of ``blocks`` (byte counts): the progress bar's steps."""
+    pending = 0
+    for size in blocks:
+        pending += size
+        while pending >= TICK_BYTES:
+            pending -= TICK_BYTES
+            yield None
+
+
+def _folder_bytes(folder: Path) -> int:
+    return sum(p.stat().st_size for p in folder.rglob("*") if p.is_file()) if folder.is_dir() else 0
+
+
+def _remove_created(created: list[Path]) -> None:
+    for folder in reversed(created):
+        if folder.is_dir() and not any(folder.iterdir()):
+            folder.rmdir()
 
 
 def fetch_asset(
     name: str,
     url: str | None = None,
-    sha256: str | None = None,
     dest: str | os.PathLike[str] | None = None,
     *,
     force: bool = False,
     show_progress: bool = True,
     timeout_s: float = 30.0,
-    verify: Callable[[Path], list[str]] | None = None,
 ) -> Path:
-    """Download asset ``name`` (see :data:`SOURCES`), check its SHA-256, install it; returns the folder.
+    """Download the files of asset ``name`` (see :data:`SOURCES`) that mien reads, check each against the
+    SHA-256 list of the pinned commit, and install them; returns the installed folder.
 
-    url / sha256: override the recorded source (``sha256`` is 64 hex digits). dest: the folder to create
-    (default :func:`mien.paths.installed_path`). force: replace an existing folder at ``dest``. verify: a
-    function listing what an unpacked folder lacks (empty list: complete), run before it is published.
-    Raises :class:`InvalidValueError` on a bad URL, an HTTP error, an unreachable server, a hash mismatch
-    (or no known hash), an archive that is not a zip or lacks the asset, or an existing ``dest``;
-    nothing is left behind then.
+    url: the base URL serving the commit's files instead of the recorded one (a mirror, a local server).
+    dest: the folder to create (default :func:`mien.paths.installed_path`). force: replace an existing folder
+    at ``dest``. A second call after an interruption resumes (see the module docstring).
+    Raises :class:`InvalidValueError` on a bad URL or an existing ``dest``, :class:`FetchError` when a
+    download fails (the message says whether the finished files were kept for a resume).
     """
-
     if name not in SOURCES:
         raise UnknownNameError("fetchable asset", name, tuple(SOURCES))
     source = SOURCES[name]
-    url = url or source.url
-    expected = _check_sha256(sha256) or _check_sha256(source.sha256)
+    base = _check_base_url(url or source.base_url)
     target = Path(dest).expanduser() if dest is not None else installed_path(source.asset)
     if target.exists() and not force:
         raise InvalidValueError("dest", str(target), "a folder that does not exist yet (or pass --force to replace it)")
-    created = []  # parent folders made here, removed again on failure
-    for parent in reversed(target.parents):
-        if not parent.exists():
-            created.append(parent)
+    hashes = file_hashes(source)
+    files = files_to_fetch(source)
+    unlisted = [path for path in files if path not in hashes]
+    if unlisted:  # the loader reads a file the pinned commit's list lacks: the package is inconsistent
+        raise FetchError(f"{source.hashes} lists no SHA-256 for {unlisted[0]}; reinstall mien")
+    created = [parent for parent in reversed(target.parents) if not parent.exists()]
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise InvalidValueError("dest", str(target), f"a place that can be written ({exc.strerror})") from None
+    staging = staging_folder(target)
     try:
-        with tempfile.TemporaryDirectory(dir=target.parent, prefix=f".{target.name}.partial-") as work:
-            archive = Path(work) / f"{name}.zip"
-            digest = _download(url, archive, show_progress, timeout_s, name)
-            if not expected:
-                raise InvalidValueError(
-                    "sha256", None, f"the archive's SHA-256, but none is recorded for {url}; the download measured "
-                    f"{digest}: check it against the source, then run again with --sha256 {digest}"
-                )  # fmt: skip
-            if digest != expected:
-                raise InvalidValueError(
-                    "sha256", digest, f"{expected} for {url}: the download does not match, nothing was installed"
-                )
-            root = _unpack(archive, Path(work) / "unpacked", source.marker, url)
-            missing = verify(root) if verify is not None else []
-            if missing:
-                shown = ", ".join(missing[:8]) + (" ..." if len(missing) > 8 else "")
-                raise InvalidValueError("archive", url, f"a complete {name} ({len(missing)} files missing: {shown})")
-            if target.exists():  # --force: move the old install aside first, dropped with the temporary folder
-                target.rename(Path(work) / "previous")
-            root.rename(target)
-    except BaseException:
-        for folder in reversed(created):
-            if folder.exists() and not any(folder.iterdir()):
-                folder.rmdir()
+        staging.mkdir(exist_ok=True)
+        todo = []
+        for path in files:  # resume: keep what an earlier run finished, if it still matches
+            done = staging / path
+            if done.is_file() and file_sha256(done) == hashes[path]:
+                continue
+            done.unlink(missing_ok=True)
+            todo.append(path)
+        left = max(0, source.download_bytes - _folder_bytes(staging))
+        blocks = (
+            size
+            for path in todo
+            for size in _fetch_one(f"{base}/{path}", staging, path, hashes[path], source.commit, timeout_s)
+        )
+        desc = f"downloading {name} ({len(todo)} files, {left / _MIB:.0f} MiB)"
+        for _ in progress(_ticks(blocks), total=math.ceil(left / TICK_BYTES), desc=desc, enabled=show_progress):
+            pass
+        if target.exists():  # --force: the old install goes only once the new one is complete
+            previous = target.parent / f".{target.name}.previous"
+            shutil.rmtree(previous, ignore_errors=True)
+            target.rename(previous)
+            staging.rename(target)
+            shutil.rmtree(previous, ignore_errors=True)
+        else:
+            staging.rename(target)
+    except _Fatal as exc:
+        shutil.rmtree(staging, ignore_errors=True)
+        _remove_created(created)
+        raise FetchError(f"{exc}; nothing was installed") from None
+    except _Cut as exc:
+        verified = sum((staging / path).is_file() for path in files)
+        if _folder_bytes(staging) == 0:
+            shutil.rmtree(staging, ignore_errors=True)
+            _remove_created(created)
+            raise FetchError(f"{exc}; nothing was installed") from None
+        raise FetchError(
+            f"{exc}; {verified} of {len(files)} files ({_folder_bytes(staging) / _MIB:.0f} MiB) are kept in "
+            f"{staging}: run the same command again to resume"
+        ) from None
+    except BaseException:  # Ctrl-C or an unexpected error: what is verified stays for a resume
+        if _folder_bytes(staging) == 0:
+            shutil.rmtree(staging, ignore_errors=True)
+            _remove_created(created)
         raise
     return target

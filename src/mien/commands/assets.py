@@ -1,8 +1,9 @@
 """``mien assets``: report which assets (heads, models) are configured and found, and how to install the rest;
-``mien assets fetch NAME``: download one from its public home, check its hash and install it.
+``mien assets fetch NAME``: download the files mien reads of one from its public home, check each file's hash
+and install it.
 
-The report always exits 0: it is a report, not a check. ``fetch`` exits 2, installing nothing, when the
-download fails or its SHA-256 does not match.
+The report always exits 0: it is a report, not a check. ``fetch`` exits 2, installing nothing, when a download
+fails or a file's SHA-256 does not match (after a cut connection it keeps the verified files to resume).
 """
 
 from __future__ import annotations
@@ -26,25 +27,46 @@ def register(subparsers: Any) -> None:
     parser.add_argument("--json", action="store_true", help="print a machine-readable JSON report")
     parser.set_defaults(handler=run)
     sub = parser.add_subparsers(dest="assets_command", metavar="ACTION")
+    from mien.assets.fetch import SOURCES  # standard library and mien's base only: light
+
+    ict = SOURCES["ict-facekit"]
     fetch = sub.add_parser(
         "fetch",
-        help="download an asset from its public home, check its SHA-256 and install it where mien looks",
-        description="Download NAME (ict-facekit: the MIT ICT-FaceKit head, GitHub's zip of "
-        "https://github.com/ICT-VGL/ICT-FaceKit), check the archive's SHA-256, unpack it into a temporary "
-        "folder and rename it into place (default: the user data folder, $MIEN_DATA_DIR or "
-        "~/.local/share/mien, where mien looks when no variable or config entry points elsewhere). A failed "
-        "or mismatching download installs nothing.",
+        help="download an asset from its public home, check every file's SHA-256 and install it where mien looks",
+        description=f"Download the files mien reads of NAME (ict-facekit: the {ict.licence} ICT-FaceKit head, "
+        f"{ict.download_bytes / 1e6:.0f} MB, from {ict.repository} at commit {ict.commit[:7]}, one by one), check each "
+        "against the SHA-256 list of that commit shipped with mien, and install them (default: the user data "
+        "folder, $MIEN_DATA_DIR or ~/.local/share/mien, where mien looks when no variable or config entry "
+        "points elsewhere). Files stream into a hidden staging folder beside the destination, renamed into "
+        "place once all are verified: a cut download is resumed by running the same command again, a file "
+        "whose bytes differ installs nothing.",
     )
     fetch.add_argument("name", help="asset to fetch: ict-facekit")
-    fetch.add_argument("--url", help="download from this URL instead (a mirror, or a zip of a pinned commit)")
-    fetch.add_argument("--sha256", metavar="HEX", help="the SHA-256 the archive must have (64 hex digits)")
+    fetch.add_argument(
+        "--url", metavar="BASE", help="fetch FILE from BASE/FILE instead (a mirror serving the pinned commit's files)"
+    )
     add_output(
-        fetch, type=Path, metavar="DIR", old=("--dest",), help="install into this folder (it must not exist yet)"
+        fetch,
+        type=_install_folder,
+        metavar="DIR",
+        old=("--dest",),
+        help="install into this folder (it must not exist yet)",
     )
     fetch.add_argument("--force", action="store_true", help="replace an existing install at the destination")
     fetch.add_argument("--timeout", type=positive_seconds, default=30.0, help="network timeout, seconds (default 30)")
     add_quiet(fetch)
     fetch.set_defaults(handler=run_fetch)
+
+
+def _install_folder(text: str) -> Path:
+    """argparse type: the folder a fetch creates (not yet: the fetch makes it); refused under a regular file."""
+    path = Path(text).expanduser()
+    existing = path.parent
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    if not existing.is_dir():
+        raise argparse.ArgumentTypeError(f"{text}: {existing} is a file, so no folder can be made under it")
+    return path
 
 
 def _report() -> dict[str, Any]:
@@ -135,25 +157,14 @@ def run_fetch(args: argparse.Namespace) -> int:
     name = args.name.replace("_", "-").lower()
     if name not in SOURCES:
         raise UnknownNameError("fetchable asset", args.name, tuple(SOURCES))
-    verify = None
-    if SOURCES[name].asset == "ict_facekit":
-        from mien.rig.ict_facekit import ict_missing_files
-
-        verify = ict_missing_files
     path = fetch_asset(
-        name,
-        args.url,
-        args.sha256,
-        args.output,
-        force=args.force,
-        show_progress=not args.quiet,
-        timeout_s=args.timeout,
-        verify=verify,
+        name, args.url, args.output, force=args.force, show_progress=not args.quiet, timeout_s=args.timeout
     )
-    print(f"installed {name} ({SOURCES[name].licence} licence) in {path}")
+    source = SOURCES[name]
+    print(f"installed {name} ({source.licence} licence, {source.repository} at {source.commit[:7]}) in {path}")
     if args.output is not None:
         from mien.paths import ASSETS
 
-        env_var = ASSETS[SOURCES[name].asset][0]
+        env_var = ASSETS[source.asset][0]
         print(f"mien looks in the default folder only; point {env_var} at {path} to use this one")
     return 0
