@@ -119,3 +119,11 @@ def test_bad_frames_are_refused_with_the_value() -> None:
         CaptureSettings(neutral_s=(2.0, 1.0))
     stream.reset()
     assert stream.push(0.0, None, None).shape == (62,)
+
+
+def test_a_one_frame_dropout_comes_back_at_once() -> None:
+    stream = CaptureStream(CaptureSettings(neutral_first_s=0.0, filter=False))
+    smile = _smile_scores(1, 0)[0]
+    first = stream.push(0.0, smile, np.zeros(3))
+    assert np.allclose(stream.push(1 / FPS, None, None), first)  # held
+    assert np.allclose(stream.push(2 / FPS, smile, np.zeros(3)), first)  # the tracked face again, no blend delay

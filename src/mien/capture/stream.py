@@ -121,6 +121,7 @@ class CaptureStream:
         self._samples: list[np.ndarray] = []
         self._neutral = self._fixed_neutral if self._fixed_neutral is not None else np.zeros(N_INPUT)
         self._last_t: float | None = None
+        self._previous_t: float | None = None
         self._shown = np.zeros(len(FACE_CHANNELS))
         self._last_face = np.zeros(len(FACE_CHANNELS))
         self._last_face_t: float | None = None
@@ -157,7 +158,7 @@ class CaptureStream:
         t = float(t_s)
         if not np.isfinite(t) or (self._last_t is not None and t <= self._last_t):
             raise InvalidValueError("t_s", t_s, f"a finite time after the last frame's ({self._last_t})")
-        self._last_t = t
+        self._previous_t, self._last_t = self._last_t, t
         if blendshapes is None:
             return self._lost(t)
         scores = np.asarray(blendshapes, dtype=np.float64)
@@ -179,7 +180,9 @@ class CaptureStream:
             away_s = t - self._away_since
             if away_s > s.hold_s:
                 self._filter.reset()  # an old state would smear the new take
-            self._enter = (t, min(s.enter_s, away_s), self._shown.copy())
+            # the blend starts at the last faceless frame, so a one-frame dropout comes back at once
+            start = t if self._previous_t is None else self._previous_t
+            self._enter = (start, min(s.enter_s, away_s), self._shown.copy())
             self._away_since = None
         value = self._filter(t, raw) if s.filter else raw
         base = self._neutral[:N_BLENDSHAPES]
