@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from mien.capture import FACE_FOUND_CHANNEL, capture_file, capture_frames, capture_video, neutral_from_image
+from mien.cli import main
 from mien.errors import InvalidValueError
 from mien.exchange import arkit_csv, openface_csv
 from mien.facs.arkit import ARKIT_INDEX, ARKIT_NAMES
@@ -45,6 +46,16 @@ def test_an_openface_csv_is_kept_as_read(shared_data: Path) -> None:
     assert clip.channels == (*FACE_CHANNELS, FACE_FOUND_CHANNEL) and clip.n_frames == read.n_frames
     np.testing.assert_allclose(clip.select(read.channels).values, read.values)
     assert not captured.weights.any()
+
+
+@pytest.mark.parametrize("option", [["--route", "arkit"], ["--neutral", "0:1"], ["--no-filter"]])
+def test_options_that_do_not_apply_to_an_openface_csv_are_refused(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], option: list[str]
+) -> None:
+    path = str(shared_data / "formats" / "OpenFace_Test.csv")
+    assert main(["capture", path, "-o", str(tmp_path / "x.npz"), *option]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and option[0] in err and "OpenFace's own AU intensities" in err
 
 
 def test_a_track_file_gives_the_capture_of_its_video(shared_data: Path, landmarker_path: Path, tmp_path: Path) -> None:

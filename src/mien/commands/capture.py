@@ -98,38 +98,58 @@ def _positive_hz(text: str) -> float:
 
 def run(args: argparse.Namespace) -> int:
     """Capture ``args.recording`` and write the clip to ``args.output``."""
+    import warnings
     from dataclasses import replace
 
     from mien.capture import CaptureSettings, capture_file, neutral_from_image
+    from mien.commands._checks import refuse_option
     from mien.errors import InvalidValueError
-    from mien.exchange import writer_for
+    from mien.exchange import format_for, writer_for
 
     if args.output.suffix.lower() not in _OUTPUT_SUFFIXES:
         raise InvalidValueError(
             "output", str(args.output), "a .csv, .json or .npz file (they carry every channel and the face_found "
             "mask; convert it afterwards with `mien export CLIP -o OUT`)"
         )  # fmt: skip
+    if args.recording.suffix.lower() == ".csv" and format_for(args.recording, "read") == "openface_csv":
+        interval = args.neutral and "{:g}:{:g}".format(*args.neutral)
+        options = (
+            ("--neutral", interval),
+            ("--neutral-image", args.neutral_image),
+            ("--no-neutral", args.no_neutral),
+            ("--cutoff-hz", args.cutoff_hz),
+            ("--no-filter", args.no_filter),
+            ("--route", "arkit" if args.route == "arkit" else None),
+        )
+        given = [(option, value) for option, value in options if value]
+        if given:
+            reason = (
+                "an OpenFace CSV holds OpenFace's own AU intensities, kept as read (no scores to calibrate or filter)"
+            )
+            refuse_option(given[0][0], given[0][1], reason)
     settings = CaptureSettings(neutral_first_s=0.0 if args.no_neutral else args.neutral_first_s, neutral_s=args.neutral)
     if args.cutoff_hz is not None:
         settings = replace(settings, min_cutoff_hz=args.cutoff_hz)
     if args.no_filter:
         settings = replace(settings, filter=False)
     neutral = neutral_from_image(args.neutral_image, args.landmarker) if args.neutral_image else None
-    capture = capture_file(
-        args.recording,
-        settings,
-        neutral=neutral,
-        model=args.landmarker,
-        use_cache=not args.no_cache,
-        show_progress=not args.quiet,
-    )
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        capture = capture_file(
+            args.recording,
+            settings,
+            neutral=neutral,
+            model=args.landmarker,
+            use_cache=not args.no_cache,
+            show_progress=not args.quiet,
+        )
+    for warning in caught:
+        print(f"mien capture: warning: {warning.message}")
     if not capture.face_found.any():
         raise InvalidValueError(
             "recording", str(args.recording), f"a recording showing a face (none was found on any of its "
             f"{capture.n_frames} frames; a face too small or too dark is not found either)"
         )  # fmt: skip
-    if args.route == "arkit" and not capture.weights.any() and capture.frames.any():
-        raise InvalidValueError("--route", "arkit", "au for an OpenFace CSV (it holds AU intensities, no ARKit scores)")
     clip = capture.clip(args.route, mask=not args.no_mask)
     writer_for(args.output)(clip, args.output)
     print(capture.report())
