@@ -235,7 +235,7 @@ def test_bad_capture_options_exit_2(argv: list[str], words: str, capsys: pytest.
     assert error.startswith("mien serve: error:") and words in error and "Traceback" not in error
 
 
-def test_an_unreadable_video_and_an_unknown_follower_exit_2(
+def test_an_unreadable_video_an_unknown_follower_and_a_bad_model_exit_2(
     shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     corrupt = tmp_path / "corrupt.mp4"
@@ -245,6 +245,10 @@ def test_an_unreadable_video_and_an_unknown_follower_exit_2(
     video = str(shared_data / "video" / "single_face.mp4")
     assert main(["serve", "--check", "--capture", video, "--character", "a", "--follow", "z"]) == 2
     assert "--follow='z'" in capsys.readouterr().err
+    not_a_model = tmp_path / "model.task"
+    not_a_model.write_text("not a MediaPipe bundle\n")
+    assert main(["serve", "--check", "--capture", video, "--landmarker", str(not_a_model)]) == 2
+    assert "model.task" in capsys.readouterr().err
 
 
 def test_the_capture_key_is_one_switch() -> None:

@@ -149,7 +149,7 @@ class CaptureSource:
     def check(self) -> None:
         """Refuse what cannot work before the server starts (:class:`InvalidValueError` naming the value): a camera
         that does not exist, is busy or is no camera; a missing file or one that is no readable video; a missing
-        landmarker model."""
+        landmarker model or one MediaPipe refuses."""
         from mien.paths import require_asset
 
         if self.device is not None:
@@ -163,6 +163,9 @@ class CaptureSource:
             if header.width <= 0 or header.height <= 0:
                 raise InvalidValueError("video", self.config.source, "a video with frames (its size is 0)")
         require_asset("face_landmarker", self.config.model)
+        from mien.tracking.landmarker import Landmarker
+
+        Landmarker(self.config.model, mode="image").close()  # a file MediaPipe refuses is named here, not later
 
     def start(self) -> None:
         """Start the reader and the tracker threads (idempotent while running)."""
