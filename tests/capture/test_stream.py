@@ -127,3 +127,9 @@ def test_a_one_frame_dropout_comes_back_at_once() -> None:
     first = stream.push(0.0, smile, np.zeros(3))
     assert np.allclose(stream.push(1 / FPS, None, None), first)  # held
     assert np.allclose(stream.push(2 / FPS, smile, np.zeros(3)), first)  # the tracked face again, no blend delay
+
+
+def test_frame_times_that_do_not_increase_are_refused_naming_the_frame() -> None:
+    times = np.array([0.0, 0.1, 0.1, 0.2])
+    with pytest.raises(InvalidValueError, match=r"frame 2 at 0.1000 s"):
+        capture_frames("v.mp4", 30.0, times, np.zeros((4, 52)), np.zeros((4, 3)), np.ones(4, bool))

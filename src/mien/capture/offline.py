@@ -192,6 +192,10 @@ def capture_frames(
     times = np.asarray(times_s, dtype=np.float64)
     if times.shape != (n,) or np.asarray(blendshapes).shape != (n, N_BLENDSHAPES):
         raise InvalidValueError("frames", np.asarray(blendshapes).shape, f"({n}, 52) scores for {n} times")
+    bad = np.flatnonzero(np.diff(times) <= 0)
+    if bad.size or not np.all(np.isfinite(times)):
+        where = f"frame {bad[0] + 1} at {times[bad[0] + 1]:.4f} s" if bad.size else "a time stamp that is not finite"
+        raise InvalidValueError(f"{Path(source).name} frame times", where, "increasing time stamps (re-encode it)")
     if neutral is None:
         neutral = neutral_from_frames(times, blendshapes, head_pose_deg, found, settings)
     stream = CaptureStream(settings, neutral=neutral)
