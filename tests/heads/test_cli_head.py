@@ -38,7 +38,9 @@ def test_inspect_a_valid_avatar(tmp_path: Path, landmarker_path: Path, capsys: p
     assert main(["head", "inspect", str(avatar), "-o", str(picture)]) == 0
     out = capsys.readouterr().out
     assert "naming convention: rocketbox" in out
-    assert "no mouthStretchLeft: AU20 cannot show" in out
+    assert "no mouthClose: AU8 cannot show" in out  # a correction of another shape: not synthesized
+    assert "synthesized (7, the reference head's moves through the feature-point fields):" in out
+    assert "mouthStretchLeft" in out and "no mouthStretchLeft" not in out
     assert "landmarks: 68 iBUG points found on the head's render (seen from +z/+y" in out
     assert "file frame: unit m, up +y, forward +z" in out
     assert "driven harder, as far as the reference head" in out

@@ -11,7 +11,8 @@ from tests.conftest import valid_avatars
 
 from mien.heads import instrument as instrument_module
 from mien.heads import load_head
-from mien.heads.amplitude import MAX_GAIN, reference_amplitudes, target_amplitudes
+from mien.heads.amplitude import MAX_GAIN, calibration_gain, feature_moves, reference_moves
+from mien.rig.feature_points import FEATURE_NAMES
 from mien.rig.files import FileRig
 from mien.rig.heads import open_head
 
@@ -42,14 +43,23 @@ def test_every_valid_avatar_gets_landmarks_on_its_face(valid_heads: dict[str, Fi
 
 
 def test_timid_shapes_are_driven_as_far_as_the_reference(valid_heads: dict[str, FileRig]) -> None:
-    reference = reference_amplitudes()
+    reference = reference_moves()
     for name, rig in valid_heads.items():
         assert rig.shape_gains, name
         assert max(rig.shape_gains.values()) <= MAX_GAIN
-        measured = target_amplitudes(rig, tuple(rig.shape_gains))
+        measured = feature_moves(rig, tuple(rig.shape_gains))
+        best = {target: calibration_gain(measured[target], reference[target]) for target in rig.shape_gains}
         for target, gain in rig.shape_gains.items():
-            if gain < MAX_GAIN:  # not capped: now within 2 % of the reference
-                assert measured[target] == pytest.approx(reference[target], rel=0.02), (name, target)
+            twin = target.replace("Left", "Right") if target.endswith("Left") else target.replace("Right", "Left")
+            if gain < MAX_GAIN:  # not capped: now the reference's best fit (a Left/Right pair's on average)
+                fit = 0.5 * (best[target] + best[twin]) if twin != target and twin in best else best[target]
+                assert fit == pytest.approx(1.0, abs=0.01), (name, target)
+        # the sad brow (AU1 3.5 with AU4 2): the inner brows end above where they were, as on the reference
+        # (with the largest move matched to ICT's, the VALID brow lowerer sank them: 3.5 x 4.1 < 2 x 7.9 mm)
+        inner = [FEATURE_NAMES.index("BrowInnerLeft"), FEATURE_NAMES.index("BrowInnerRight")]
+        moves = feature_moves(rig, ("browInnerUp", "browDownLeft", "browDownRight"))
+        fall = np.array([moves["browDownLeft"][inner[0], 1], moves["browDownRight"][inner[1], 1]])
+        assert (3.5 * moves["browInnerUp"][inner, 1] + 2.0 * fall > 1.0).all(), name
         assert rig.info is not None
         raw = open_head(rig.info.path)
         assert raw.info is not None
@@ -87,8 +97,9 @@ def test_the_second_load_is_answered_by_the_cache(monkeypatch: pytest.MonkeyPatc
 
 
 def test_ict_written_by_blender_is_found_near_icts_own_landmarks(ict_glb: Path, ict) -> None:  # type: ignore[no-untyped-def]
-    """The issue asks 2 mm (median); measured 4.6 mm on the untextured head (eyes 2-3 mm, lips 2.5, brows 6 with no
-    brows drawn, jaw contour 10). The bound guards that figure; VALIDATION.md reports the miss."""
+    """The issue asks 2 mm (median); measured 2.7 mm on the untextured head (eyes 2.1, lips 1.8-2.1, nose 3.0,
+    brows 6 with no brows drawn, jaw contour 6.8; 4.2 before the contours were spaced as iBUG spaces them and
+    rays went through the lashes). The bounds guard those figures."""
     native, _ = ict
     rig = load_head(str(ict_glb))
     assert isinstance(rig, FileRig)
@@ -96,8 +107,9 @@ def test_ict_written_by_blender_is_found_near_icts_own_landmarks(ict_glb: Path, 
     found = rig.neutral[rig.landmarks].astype(np.float64)
     shift = np.median(found - own, axis=0)  # the two loaders put the origin 0.4 mm apart (eyeball fits)
     distances_mm = np.linalg.norm(found - shift - own, axis=1) * 1000.0
-    assert np.median(distances_mm) < 6.0
-    assert np.median(distances_mm[36:48]) < 4.0
+    assert np.median(distances_mm) < 3.5
+    assert np.median(distances_mm[36:48]) < 2.6
+    assert np.median(distances_mm[48:68]) < 2.6
 
 
 def test_named_heads_come_as_they_are() -> None:

@@ -15,17 +15,30 @@ from mien.tracking.landmarker import Landmarker
 def test_table_anchors() -> None:
     pairs = ibug68_indices()
     assert pairs.shape == (68, 2) and pairs.min() >= 0 and pairs.max() < 478
-    anchors = {36: 33, 39: 133, 42: 362, 45: 263, 30: 1, 33: 2, 48: 61, 54: 291, 8: 152}
+    anchors = {36: 33, 39: 133, 42: 362, 45: 263, 27: 168, 30: 4, 33: 2, 48: 61, 54: 291, 8: 152}
     for ibug, mesh in anchors.items():
         assert tuple(pairs[ibug]) == (mesh, mesh), ibug
     assert len(set(IBUG68_NAMES)) == 68 and IBUG68_NAMES[8] == "chin"
 
 
-def test_shapes_and_averaging() -> None:
+def test_shapes() -> None:
     points = np.arange(478 * 2, dtype=float).reshape(478, 2)
     out = ibug68(points)
     assert out.shape == (68, 2)
-    assert np.allclose(out[27], 0.5 * (points[168] + points[6]))
+    assert np.allclose(out[27], points[168])  # the nose root, one landmark
+
+
+def test_contour_points_are_spaced_evenly_along_mediapipes_contour() -> None:
+    """The jaw's nine points from ear level to the chin split MediaPipe's contour into eight equal lengths,
+    however unevenly MediaPipe's own points lie on it."""
+    rng = np.random.default_rng(3)
+    points = rng.normal(size=(478, 2))
+    contour = [127, 234, 93, 132, 58, 172, 136, 150, 149, 176, 148, 152]
+    points[contour] = np.c_[np.cumsum(rng.uniform(0.1, 2.0, len(contour))), np.zeros(len(contour))]
+    jaw = ibug68(points)[0:9]
+    assert np.allclose(jaw[:, 1], 0.0)
+    assert np.allclose(np.diff(jaw[:, 0]), (points[152, 0] - points[127, 0]) / 8)
+    assert np.allclose(jaw[[0, 8]], points[[127, 152]])
     assert ibug68(np.zeros((4, 2, 478, 3))).shape == (4, 2, 68, 3)
     with pytest.raises(InvalidValueError, match="landmarks"):
         ibug68(np.zeros((68, 2)))

@@ -19,6 +19,7 @@ from mien.fileio.streams import atomic_path
 from mien.heads.amplitude import MAX_GAIN, calibrate_amplitudes
 from mien.heads.instrument import Instrumentation
 from mien.heads.registry import instrument_head
+from mien.heads.synthesize import synthesize_targets
 from mien.render.camera import Camera
 from mien.render.clip_render import render_still
 from mien.rig.files.head import FileRig
@@ -43,13 +44,21 @@ class HeadInspection:
     """What instrumenting found (None for mien's own heads, whose landmarks are built in)."""
     gains: dict[str, float]
     """Factors put on the head's timid targets (:mod:`mien.heads.amplitude`); empty when none."""
+    synthesized: tuple[str, ...] = ()
+    """ARKit targets the file lacked, made through the feature-point fields (:mod:`mien.heads.synthesize`)."""
 
     def report(self) -> str:
         """Lines for people: the file's reading, then landmarks and scale."""
         rig = self.rig
         lines = []
         if isinstance(rig, FileRig) and rig.info is not None:
-            lines += [line for line in rig.info.report().splitlines() if not line.startswith("landmarks:")]
+            made = tuple(f"no {name}:" for name in self.synthesized)
+            lines += [line for line in rig.info.report().splitlines() if not line.startswith(("landmarks:", *made))]
+            if self.synthesized:
+                lines.append(
+                    f"synthesized ({len(self.synthesized)}, the reference head's moves through the feature-point "
+                    f"fields): {', '.join(self.synthesized)}"
+                )
         else:
             lines.append(f"head: {self.spec} ({rig.name}, built in: {len(rig.targets)} targets)")
         points = rig.neutral[rig.landmarks].astype(np.float64)
@@ -126,7 +135,9 @@ def inspect_head(
     rig = open_head(spec, identity)
     found = None
     gains: dict[str, float] = {}
+    made: tuple[str, ...] = ()
     if isinstance(rig, FileRig) and rig.info is not None:
         rig, found = instrument_head(rig, landmarker_model)
         rig, gains = calibrate_amplitudes(rig)
-    return HeadInspection(spec, rig, found, gains)
+        rig, made = synthesize_targets(rig)
+    return HeadInspection(spec, rig, found, gains, made)

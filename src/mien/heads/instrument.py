@@ -47,7 +47,7 @@ __all__ = [
     "instrument_cached",
 ]
 
-INSTRUMENT_VERSION = 4
+INSTRUMENT_VERSION = 6
 """Bumped when the method changes, so cached results of an older method are recomputed."""
 
 HUMAN_INTEROCULAR_M = 0.090
@@ -61,9 +61,17 @@ _UNIT_TOLERANCE = 1.6
 """A unit is accepted when the face's inter-ocular distance in it is within this factor of the human one."""
 
 _RENDER_PX = 640
+_OUTLINE_DEPTH = 1.2
+"""How far behind the nose tip a face's outline (the jaw line seen from the front) may lie, as a fraction of the
+outer eye corners' distance: ICT-FaceKit's ear-level jaw points lie 1.06 of it behind."""
 _CLOSE_MARGINS = (0.15, 0.25, 0.35)
 """Margins of the closer looks around the face first found, as fractions of its size."""
 _FOV_DEG = 20.0
+_SKIN_REACH = 0.15
+"""How far behind a landmark ray's first hit its skin hit may lie to be taken instead, as a fraction of the
+outer eye corners' distance: 13.5 mm on an adult, further than lashes stand off the lids (ICT-FaceKit's outer
+lashes: 10.6 mm in front of the eye corner), nearer than the socket behind an eyeball. On ICT written by Blender
+it moves the eye corners from 4.2 and 6.8 mm off ICT's own to 1.9 and 0.9 mm."""
 _AXES = {"+x": (1, 0, 0), "-x": (-1, 0, 0), "+y": (0, 1, 0), "-y": (0, -1, 0), "+z": (0, 0, 1), "-z": (0, 0, -1)}
 _VIEWS: tuple[tuple[str, str], ...] = (
     ("+z", "+y"), ("-z", "+y"), ("-y", "+z"), ("+y", "+z"), ("+x", "+y"), ("-x", "+y"),
@@ -214,6 +222,81 @@ def _bare(faces: np.ndarray) -> RendererFactory:
     return make
 
 
+def _prefer_skin(
+    pixels: np.ndarray,
+    placed: np.ndarray,
+    faces: np.ndarray,
+    targets: np.ndarray,
+    skin: np.ndarray,
+    ids: np.ndarray,
+    weights: np.ndarray,
+) -> None:
+    """Move the hits of landmark rays that met a see-through part in front of the skin (lashes, an eye's
+    occlusion shell, a tear line) onto the skin just behind it, in place.
+
+    ``pixels`` (n, 3) are the vertices on the picture with their depth, ``placed`` (n, 3) the same vertices in
+    the camera's space (the depth's unit); ``skin`` (m,) bool marks the skin's triangles. A ray's skin hit is
+    taken when it lies at most :data:`_SKIN_REACH` of the face's size (outer eye corners, MediaPipe 33 and 263)
+    behind its first hit, so a lid point seen on the lashes lands on the lid, and one seen on the eyeball (whose
+    skin lies far behind, in the socket) stays where it is.
+    """
+    first = ids >= 0
+    if not first[[33, 263]].all():
+        return
+    depth = np.einsum("kj,kj->k", weights, pixels[faces[np.maximum(ids, 0)], 2])
+    corners = np.einsum("kj,kjd->kd", weights[[33, 263]], placed[faces[ids[[33, 263]]]])
+    reach = _SKIN_REACH * float(np.linalg.norm(corners[0] - corners[1]))
+    off_skin = np.flatnonzero(first & ~skin[np.maximum(ids, 0)])
+    if not len(off_skin):
+        return
+    skin_ids = np.flatnonzero(skin)
+    found, found_weights = _cast(pixels, faces[skin_ids], targets[off_skin])
+    found_depth = np.einsum("kj,kj->k", found_weights, pixels[faces[skin_ids[np.maximum(found, 0)]], 2])
+    take = (found >= 0) & (found_depth - depth[off_skin] <= reach)
+    ids[off_skin[take]] = skin_ids[found[take]]
+    weights[off_skin[take]] = found_weights[take]
+
+
+def _jaw_on_skin(
+    pixels: np.ndarray,
+    placed: np.ndarray,
+    faces: np.ndarray,
+    targets: np.ndarray,
+    skin: np.ndarray,
+    ids: np.ndarray,
+    weights: np.ndarray,
+) -> None:
+    """Move the iBUG jaw points (rows 478 to 494 of ``targets``) whose ray passed the face's outline onto it, in
+    place (arguments as :func:`_prefer_skin`).
+
+    The jaw line is the face's outline, so its rays graze the skin: one drawn a pixel outside it meets the hair or
+    the back of the head far behind (on a VALID avatar 18 cm behind the cheek). A jaw point whose hit is not skin,
+    or lies more than :data:`_OUTLINE_DEPTH` of the face's size behind the nose tip, is walked a pixel at a time
+    toward the nose tip (iBUG 30) to the first skin within that depth: the outline seen from the front.
+    """
+    jaw = 478 + np.arange(17)
+    tip, corners = 478 + 30, [33, 263]
+    if ids[tip] < 0 or (ids[corners] < 0).any():
+        return
+    depth_of = lambda k: float(weights[k] @ pixels[faces[ids[k]], 2])  # noqa: E731
+    corner_points = np.einsum("kj,kjd->kd", weights[corners], placed[faces[ids[corners]]])
+    deepest = depth_of(tip) + _OUTLINE_DEPTH * float(np.linalg.norm(corner_points[0] - corner_points[1]))
+    skin_ids = np.flatnonzero(skin)
+    skin_faces = faces[skin_ids]
+    for k in jaw:
+        if ids[k] >= 0 and skin[ids[k]] and depth_of(k) <= deepest:
+            continue
+        inward = targets[tip] - targets[k]
+        steps = int(np.ceil(np.linalg.norm(inward)))
+        path = targets[k] + np.outer(np.arange(1, steps) / max(steps, 1), inward)
+        found, found_weights = _cast(pixels, skin_faces, path)
+        depth = np.einsum("kj,kj->k", found_weights, pixels[skin_faces[np.maximum(found, 0)], 2])
+        near = np.flatnonzero((found >= 0) & (depth <= deepest))
+        if len(near):
+            ids[k] = skin_ids[found[near[0]]]
+            weights[k] = found_weights[near[0]]
+
+
 def _look(
     landmarker: Landmarker,
     vertices: np.ndarray,
@@ -221,10 +304,14 @@ def _look(
     rotation: np.ndarray,
     around: np.ndarray,
     renderer: RendererFactory,
+    skin: np.ndarray | None = None,
 ) -> tuple[np.ndarray, int] | None:
     """Render ``vertices`` seen along ``rotation`` framing the points ``around`` (file frame) and find the face.
 
-    Returns ``(478 surface points in the file frame, rays that hit)``, or None when no face is on the picture.
+    ``skin`` (m,) bool, the skin's triangles when known: rays that meet a see-through part first land on the
+    skin behind it (:func:`_prefer_skin`). Returns ``(surface points in the file frame, rays that hit)``: the
+    478 landmarks' then the 68 iBUG points' (546, 3), and how many of the 478 rays hit; or None when no face is
+    on the picture.
     """
     viewed = vertices @ rotation.T
     camera, centre, scale = _camera_for(around @ rotation.T)
@@ -234,19 +321,38 @@ def _look(
     found = landmarker.detect(image)
     if found is None:
         return None
-    targets = found.landmarks[:, :2].astype(np.float64) * _RENDER_PX
+    marks = found.landmarks[:, :2].astype(np.float64) * _RENDER_PX
+    # the iBUG points are placed on the picture (where 300-W spaces them, along the contours drawn) and cast
+    # themselves, rather than averaged from the 478's surface points (a mean of two may lie inside the head)
+    targets = np.vstack([marks, ibug68(marks)])
     pixels = np.c_[camera.project(placed, _RENDER_PX, _RENDER_PX), camera.depth_m(placed)]
     face_ids, weights = _cast(pixels, faces, targets)
     hit = face_ids >= 0
-    if hit.sum() < 400:  # most of the face missed: the picture showed something else (or a very open mesh)
+    if hit[:478].sum() < 400:  # most of the face missed: the picture showed something else (or a very open mesh)
         return None
-    points = np.zeros((478, 3))
+    if skin is not None:
+        _prefer_skin(pixels, placed, faces, targets, skin, face_ids, weights)
+        _jaw_on_skin(pixels, placed, faces, targets, skin, face_ids, weights)
+        hit = face_ids >= 0
+    points = np.zeros((len(targets), 3))
     points[hit] = np.einsum("kj,kjd->kd", weights[hit], vertices[faces[face_ids[hit]]])
     if not hit.all():  # a landmark off the mesh (a hole, an eye with no cornea): take the nearest hit one's
         from_pixels = targets[hit]
         for k in np.flatnonzero(~hit):
             points[k] = points[hit][int(np.argmin(np.linalg.norm(from_pixels - targets[k], axis=1)))]
-    return points, int(hit.sum())
+    return points, int(hit[:478].sum())
+
+
+def _skin_part(vertices: np.ndarray, parts: np.ndarray, points: np.ndarray) -> int:
+    """The connected part (label of ``parts``) whose vertices are nearest most of ``points``: the skin."""
+    nearest = np.argmin(np.linalg.norm(vertices[None, :, :] - points[:, None, :], axis=2), axis=1)
+    return int(np.bincount(parts[nearest]).argmax())
+
+
+def _skin_faces(vertices: np.ndarray, faces: np.ndarray, parts: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """(m,) bool: the triangles of the skin, the part nearest most of the iBUG points of ``points`` (546, 3)
+    (:func:`_look`'s, file frame)."""
+    return parts[faces[:, 0]] == _skin_part(vertices, parts, points[478:])
 
 
 def _face_box(points: np.ndarray, rotation: np.ndarray, margin: float) -> np.ndarray:
@@ -324,6 +430,7 @@ def instrument(
     if faces.ndim != 2 or faces.shape[1] != 3 or not len(faces) or faces.min() < 0 or faces.max() >= len(vertices):
         raise InvalidValueError(f"{name} faces", faces.shape, "(m, 3) ids of existing vertices, m > 0")
     draw = renderer or _bare(faces)
+    parts = vertex_components(len(vertices), faces)
     with Landmarker(landmarker_model, mode="image") as landmarker:
         for view, rotation in _views():
             first = None
@@ -333,11 +440,17 @@ def instrument(
             if first is None:
                 continue
             # Closer looks, framed on the face found (a full body or a head with shoulders showed it small), at a
-            # few framings: the mean of their landmarks halves MediaPipe's frame-to-frame jitter.
+            # few framings: the mean of their landmarks halves MediaPipe's frame-to-frame jitter. Their rays land
+            # on the skin, not on lashes in front of it.
+            skin = _skin_faces(vertices, faces, parts, first[0])
             looks = [
                 found
                 for margin in _CLOSE_MARGINS
-                if (found := _look(landmarker, vertices, faces, rotation, _face_box(first[0], rotation, margin), draw))
+                if (
+                    found := _look(
+                        landmarker, vertices, faces, rotation, _face_box(first[0][:478], rotation, margin), draw, skin
+                    )
+                )
             ] or [first]
             points = np.mean([look[0] for look in looks], axis=0)
             found_view = view
@@ -348,7 +461,7 @@ def instrument(
                 f"no face found on {name} from any of {len(_VIEWS)} directions: the mesh may not be a head, or "
                 "its face may be hidden (hair or a helmet over it); pass the head mesh alone"
             )
-    points68 = ibug68(points)
+    points, points68 = points[:478], points[478:]
     interocular = float(np.linalg.norm(points68[45] - points68[36]))
     unit = _unit(interocular, name)
     # Axes from the face itself: up from the chin (8) to the nose root (27), left from the subject's right
@@ -361,11 +474,9 @@ def instrument(
     forward, _ = _snap(forward_measured)
     if abs(float(up @ forward)) > 0.5:
         raise InvalidValueError(f"{name} axes", found_view, "a face whose up and forward axes can be told apart")
-    # Landmark vertices on the skin: the connected part most landmarks fall on (not an eyeball or a tooth that a
-    # ray met first), so paths between landmarks (the feature-point rig's geodesics) stay on one surface.
-    parts = vertex_components(len(vertices), faces)
-    nearest = np.argmin(np.linalg.norm(vertices[None, :, :] - points68[:, None, :], axis=2), axis=1)
-    skin = np.flatnonzero(parts == np.bincount(parts[nearest]).argmax())
+    # Landmark vertices on the skin (not an eyeball or a tooth that a ray met first), so paths between landmarks
+    # (the feature-point rig's geodesics) stay on one surface.
+    skin = np.flatnonzero(parts == _skin_part(vertices, parts, points68))
     distances = np.full((68, len(vertices)), np.inf)
     distances[:, skin] = np.linalg.norm(vertices[None, skin, :] - points68[:, None, :], axis=2)
     return Instrumentation(

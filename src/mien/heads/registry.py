@@ -22,6 +22,7 @@ from mien.heads.amplitude import calibrate_amplitudes
 from mien.heads.instrument import Instrumentation, instrument_cached
 from mien.heads.mouth import mouth_regions
 from mien.heads.placement import place_rig
+from mien.heads.synthesize import missing_targets, synthesize_targets
 from mien.render.camera import Camera
 from mien.render.clip_render import FrameRenderer, make_renderer
 from mien.rig.feature_points import FeaturePointRig
@@ -79,18 +80,23 @@ def load_head(
     ``identity`` is a preset of a named head (see :func:`mien.rig.heads.open_head`). A head file is
     instrumented on first use (about 5 s; then cached per file hash), which needs MediaPipe
     (``pip install 'mien[track]'``) and its ``face_landmarker.task`` (``landmarker_model`` or the configured
-    asset), and its timid shapes are driven as far as the reference head's (``calibrate``;
-    :mod:`mien.heads.amplitude`). With ``feature_points`` the Broekens feature-point rig is compiled onto the
-    head (54 extra targets ``fp_<Feature>_<axis>``) with its skin-detail correctives (``fpc_<shape>``,
-    :mod:`mien.rig.fp_correctives`).
+    asset), its timid shapes are driven as far as the reference head's (``calibrate``;
+    :mod:`mien.heads.amplitude`), and the ARKit shapes it lacks are made through the feature-point fields
+    (:mod:`mien.heads.synthesize`: a Rocketbox head's lip stretcher; about 2 s). With ``feature_points`` the
+    Broekens feature-point rig is compiled onto the head (54 extra targets ``fp_<Feature>_<axis>``) with its
+    skin-detail correctives (``fpc_<shape>``, :mod:`mien.rig.fp_correctives`).
     """
     rig = open_head(name, identity)
+    fp = None
     if isinstance(rig, FileRig) and rig.info is not None:
         rig, _ = instrument_head(rig, landmarker_model)
         if calibrate:
             rig, _ = calibrate_amplitudes(rig)
+        if missing_targets(rig):
+            fp = FeaturePointRig.build(rig)
+            rig, _ = synthesize_targets(rig, fp=fp)
     if feature_points:
-        fp = FeaturePointRig.build(rig)
+        fp = fp or FeaturePointRig.build(rig)
         rig = rig.with_targets(fp.compile())
         rig = rig.with_targets(corrective_targets(fp, rig))
     return rig

@@ -1,0 +1,58 @@
+"""ARKit targets a head lacks, made from the reference head's moves through Broekens' feature-point fields.
+
+Many rigs lack a few of the shapes mien's AUs drive: the Rocketbox heads of the VALID library have no lip
+stretcher (``mouthStretchLeft``/``Right``: AU20, the mouth of fear) and no lip presser. Without them an AU shows
+nothing and the emotion built on it reads as another (fear as anger). :func:`synthesize_targets` makes each
+missing ARKit target that the reference table knows (``data/arkit_feature_moves.csv``, :mod:`mien.heads.amplitude`)
+from the feature-point rig compiled on the head (:class:`mien.rig.feature_points.FeaturePointRig`): each feature's
+smooth field moved by the reference's move of that feature at weight 1, scaled to the head's face size. So only
+the skin of the features the shape moves moves (a lip stretcher moves the lips and mouth corners, nothing of the
+brows), the shape is the smoothest skin through the reference's moves, and it is as strong as the reference's.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mien.heads.amplitude import face_scale_mm, reference_moves
+from mien.rig.feature_points import FeaturePointRig
+from mien.rig.model import MorphTarget, Rig
+
+__all__ = ["MIN_FEATURE_MOVE_MM", "missing_targets", "synthesize_targets"]
+
+MIN_FEATURE_MOVE_MM = 0.5
+"""A reference move smaller than this (mm at a 90 mm face) is left out of a synthesized shape: the reference's
+faint pulls of far features (a lip stretcher's 0.3 mm at the nostrils) are its sculpting, not the action."""
+
+
+def missing_targets(rig: Rig) -> tuple[str, ...]:
+    """The ARKit targets of the reference table that ``rig`` lacks, in the table's order; none for a rig driven
+    through VRM emotion presets (its faces are its author's)."""
+    info = getattr(rig, "info", None)
+    if info is not None and info.names.presets:
+        return ()
+    have = set(rig.target_names)
+    return tuple(name for name in reference_moves() if name not in have)
+
+
+def synthesize_targets(
+    rig: Rig, names: tuple[str, ...] | None = None, fp: FeaturePointRig | None = None
+) -> tuple[Rig, tuple[str, ...]]:
+    """``rig`` with the targets ``names`` (default: :func:`missing_targets`) made from the reference's feature
+    moves, and the names made. ``fp``: the feature-point rig already built on ``rig`` (built here otherwise)."""
+    wanted = missing_targets(rig) if names is None else tuple(names)
+    if not wanted:
+        return rig, ()
+    reference = reference_moves()
+    fields = (fp or FeaturePointRig.build(rig)).compile()  # fp_<Feature>_<axis>: 1 m along the axis
+    metres = 1.0 / face_scale_mm(rig)
+    made = []
+    for name in wanted:
+        moves = reference[name].ravel()  # the same feature-major, x/y/z order as the fields
+        dense = np.zeros((rig.n_vertices, 3))
+        for move, field in zip(moves, fields, strict=True):
+            if abs(move) >= MIN_FEATURE_MOVE_MM:
+                dense[field.vertex_ids] += move * metres * field.deltas
+        ids = np.flatnonzero(np.abs(dense).max(axis=1) > 1e-7).astype(np.int32)
+        made.append(MorphTarget(name, ids, dense[ids].astype(np.float32)))
+    return rig.with_targets(tuple(made)), wanted
