@@ -100,3 +100,20 @@ def test_render_a_clip_file_with_a_subset_of_channels(tmp_path):
     bad = tmp_path / "bad.csv"
     bad.write_text("time_s,AU99\n0,0\n")
     assert main(["render", str(bad), "-o", str(tmp_path / "bad.png")]) == 2
+
+
+def test_the_demo_says_which_head_it_used_and_how_to_get_the_realistic_one(tmp_path, monkeypatch):
+    from mien.commands.demo import head_line
+
+    monkeypatch.setenv("MIEN_DATA_DIR", str(tmp_path / "data"))
+    monkeypatch.setenv("MIEN_CONFIG", str(tmp_path / "no-config.toml"))
+    monkeypatch.delenv("MIEN_ICT_FACEKIT", raising=False)
+    assert head_line("builtin", 14883, 52, "portrait") == (
+        "head: builtin (the stylised built-in head: 14,883 vertices, 52 morph targets); camera: portrait; "
+        "for the realistic head run `mien assets fetch ict-facekit` (190 MB), then this again"
+    )
+    (tmp_path / "data" / "ict-facekit").mkdir(parents=True)  # where the fetch installs
+    assert head_line("builtin-b", 14883, 52, "portrait").endswith("; the realistic head is installed: add --head ict")
+    assert head_line("ict-facekit", 26719, 60, "portrait") == (
+        "head: ict-facekit (the realistic head: 26,719 vertices, 60 morph targets); camera: portrait"
+    )

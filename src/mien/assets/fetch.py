@@ -230,6 +230,8 @@ def _ticks(blocks: Iterator[int]) -> Iterator[None]:
         while pending >= TICK_BYTES:
             pending -= TICK_BYTES
             yield None
+    if pending:  # the last, partial MiB: the bar ends full
+        yield None
 
 
 def _folder_bytes(folder: Path) -> int:

@@ -72,6 +72,24 @@ def demo_clip(
     return clip, getattr(character, "last_feature_weights", None), peaks
 
 
+def head_line(name: str, n_vertices: int, n_targets: int, camera: str) -> str:
+    """The one line saying which head the demo (and so the quick start) used and how to get the realistic one."""
+    from mien.assets.fetch import SOURCES
+    from mien.paths import asset_path
+
+    line = f"head: {name} ({n_vertices:,} vertices, {n_targets} morph targets); camera: {camera}"
+    if name == "ict-facekit":
+        return line.replace(" (", " (the realistic head: ", 1)
+    if not name.startswith("builtin"):
+        return line
+    line = line.replace(" (", " (the stylised built-in head: ", 1)
+    installed = asset_path("ict_facekit")
+    if installed is not None and installed.exists():
+        return f"{line}; the realistic head is installed: add --head ict"
+    size_mb = SOURCES["ict-facekit"].download_bytes / 1e6
+    return f"{line}; for the realistic head run `mien assets fetch ict-facekit` ({size_mb:.0f} MB), then this again"
+
+
 def run(args: argparse.Namespace) -> int:
 
     from mien.exchange.curves_csv import write as write_csv
@@ -89,7 +107,7 @@ def run(args: argparse.Namespace) -> int:
     out.mkdir(parents=True, exist_ok=True)
     clip, features, peaks = demo_clip(args.intensity, args.fps, args.seed, args.basis)
     rig, camera, size = scene_from_args(args)
-    print(f"head: {rig.name} ({rig.n_vertices} vertices, {len(rig.targets)} morph targets); camera: {args.camera}")
+    print(head_line(rig.name, rig.n_vertices, len(rig.targets), args.camera))
     curves = write_csv(clip, out / "demo_curves.csv")
     plot = plot_clip(clip, out / "demo_curves.png", title="mien demo: AU curves", events=[(t, n) for t, n in peaks])
     weights, poses = face_to_rig(rig, clip, features)
