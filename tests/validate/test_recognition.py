@@ -3,6 +3,8 @@ when a change breaks the faces (one head, the five clearest emotions, frontal, t
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -62,7 +64,7 @@ def _judged(
     return StimulusScore(Stimulus(expression, "ict", "a", "facs", view, 1.2), mean, True, crops=readings)
 
 
-def test_a_face_that_reads_under_one_framing_only_does_not_pass() -> None:
+def test_a_face_that_reads_under_one_framing_only_does_not_pass(tmp_path: Path) -> None:
     """The averaging at work: joy that the landmark crops read as happy and fer's crops as neutral is a miss, though
     the landmark crops alone would pass it; the spread across crops shows how far one crop would have moved it."""
     one_framing = [_judged("joy", {"happy": 0.55, "neutral": 0.45}, {"neutral": 0.8, "happy": 0.2}) for _ in range(8)]
@@ -79,6 +81,11 @@ def test_a_face_that_reads_under_one_framing_only_does_not_pass() -> None:
     assert data["framing"] == "averaged" and data["recognition_by_framing"]["landmarks"]["joy"] == 1.0
     assert data["recognition_spread"]["joy"] == [0.0, 1.0]
     assert len(data["stimuli"][0]["crops"]) == 12
+    # the report shows the spread beside each figure: joy 0% by the verdict, 0-100% as one crop alone would judge
+    from mien.validate.report import _emotions_section
+
+    page = _emotions_section(result, tmp_path)
+    assert "<td><b>joy</b></td><td>0% <small>(0%-100%)</small></td>" in page and "judged <b>averaged</b>" in page
 
 
 def test_judge_crops_cover_both_framings_jittered() -> None:

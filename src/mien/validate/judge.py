@@ -28,10 +28,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mien.extras import require
 from mien.tracking.ibug68 import ibug68
 from mien.validate.emotion_classifier import FRAMINGS, INPUT_SIZE, EmotionClassifier, face_crop, grey
 
-__all__ = ["JUDGE_CROPS", "RENDER_SCALES", "JudgeCrop", "crop_names", "framing_of", "judge", "judge_crops"]
+__all__ = [
+    "JUDGE_CROPS",
+    "RENDER_SCALES",
+    "JudgeCrop",
+    "crop_names",
+    "framing_of",
+    "judge",
+    "judge_crops",
+    "resample",
+]
 
 
 @dataclass(frozen=True)
@@ -70,6 +80,15 @@ wider, then 4% down-right and 6% tighter. Three per framing, six in all."""
 
 RENDER_SCALES: tuple[float, ...] = (1.0, 0.75)
 """Render sizes of each face, relative to the run's size (512x512 -> 512 and 384 pixels)."""
+
+
+def resample(rgb: np.ndarray, scale: float) -> np.ndarray:
+    """``rgb`` ((h, w, 3) uint8) reduced to ``scale`` of its size by area averaging (PIL's box filter): the same
+    picture as a camera with fewer pixels records it, each pixel the mean of the scene over its area."""
+    image = require("PIL.Image", "render")
+    height, width = rgb.shape[:2]
+    size = (round(width * scale), round(height * scale))
+    return np.asarray(image.fromarray(np.ascontiguousarray(rgb)).resize(size, image.Resampling.BOX))
 
 
 def crop_names(

@@ -54,7 +54,7 @@ from mien.validate.expressions import EXPRESSIONS
 from mien.validate.face_detector import FaceDetector
 from mien.validate.facs_reading import with_facs_readings
 from mien.validate.figures import plot_confusion, plot_quality
-from mien.validate.judge import JUDGE_CROPS, RENDER_SCALES, JudgeCrop, crop_names, judge
+from mien.validate.judge import JUDGE_CROPS, RENDER_SCALES, JudgeCrop, crop_names, judge, resample
 from mien.validate.landmark_aus import LandmarkAUs
 from mien.validate.options import ValidateOptions, open_detector
 from mien.validate.scores import RecognitionResult, Stimulus, StimulusScore
@@ -136,6 +136,7 @@ def run_recognition(
     progress: bool = True,
     judge_with: str = "averaged",
     samples: int | Sequence[int] = 4,
+    rasterise_sizes: bool = False,
 ) -> RecognitionResult:
     """Render and judge every stimulus (grouped by head and basis so each rig and renderer is built once).
 
@@ -143,8 +144,10 @@ def run_recognition(
     classifier: rendered at every size of :data:`~mien.validate.judge.RENDER_SCALES` of ``size``, its landmarks
     found on the first, read under every crop of :data:`~mien.validate.judge.JUDGE_CROPS` (``judge_with`` a framing
     name: that framing's crops only), the verdict the mean. Other detectors give their own probabilities.
-    ``samples``: multisample anti-aliasing of the renders, one value or one per render size (0: off; turning it off
-    changes 19 of 672 verdicts, docs/VALIDATION.md).
+    The smaller size is the render reduced by area averaging (:func:`~mien.validate.judge.resample`: what a camera
+    with fewer pixels records), or with ``rasterise_sizes`` drawn a second time at that size. ``samples``:
+    multisample anti-aliasing of the renders, one value or one per rasterised size (0: off; turning it off changes 19
+    of 672 verdicts, docs/VALIDATION.md).
     """
     own = detector is None
     active: Detector = FaceDetector() if detector is None else detector
@@ -176,9 +179,10 @@ def run_recognition(
             rig = rigs[key]
             timings["load"] += time.perf_counter() - started
             first = VIEWS[next(iter(by_view))].camera
-            sizes = [(round(size[0] * k), round(size[1] * k)) for k in scales]
+            rasterised = scales if rasterise_sizes else scales[:1]
+            sizes = [(round(size[0] * k), round(size[1] * k)) for k in rasterised]
             with contextlib.ExitStack() as stack:
-                multisamples = [samples] * len(sizes) if isinstance(samples, int) else list(samples)
+                multisamples = [samples] * len(sizes) if isinstance(samples, int) else list(samples)[: len(sizes)]
                 renderers = [
                     stack.enter_context(StimulusRenderer(rig, first, s, samples=m))
                     for s, m in zip(sizes, multisamples, strict=True)
@@ -199,7 +203,10 @@ def run_recognition(
                         weights = renderer.weights(frame, features)
                         rgb, hint = renderer.render_weights(weights)
                         deformed = renderer.last_vertices
-                        smaller = [each.draw(deformed) for each in renderers[1:]]
+                        if rasterise_sizes:
+                            smaller = [each.draw(deformed) for each in renderers[1:]]
+                        else:
+                            smaller = [resample(rgb, k) for k in scales[1:]]
                         lm = rig.landmarks
                         nose_lip = float(np.linalg.norm(deformed[lm[33]] - deformed[lm[51]])) * 1e3
                         timings["render"] += time.perf_counter() - started
