@@ -12,6 +12,7 @@ import re
 import shutil
 import subprocess
 import sys
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -33,7 +34,7 @@ class FaultyServer(http.server.SimpleHTTPRequestHandler):
 
     faults: dict[str, str] = {}  # noqa: RUF012 (one table shared by the handler instances, reset per test)
     """``"404"``, ``"differ"`` (one byte flipped), ``"cut"`` (half the body, then the connection closes),
-    ``"cut once"`` (a cut on the first request only)."""
+    ``"cut once"`` (a cut on the first request only), ``"stall"`` (half the body, then a 1 s silence)."""
     requests: list[tuple[str, str | None]] = []  # noqa: RUF012
     """(URL path, Range header) of every request, in order."""
 
@@ -64,9 +65,13 @@ class FaultyServer(http.server.SimpleHTTPRequestHandler):
         self.send_header("Content-Length", str(len(data) - start))
         self.end_headers()
         body = data[start:]
-        if fault in ("cut", "cut once"):
-            body = body[: len(body) // 2]
+        if fault in ("cut", "cut once", "stall"):
+            self.wfile.write(body[: len(body) // 2])
+            self.wfile.flush()
+            if fault == "stall":  # then nothing, longer than the client waits
+                time.sleep(1.0)
             self.close_connection = True
+            return
         self.wfile.write(body)
 
 
@@ -190,16 +195,45 @@ def test_a_failed_force_keeps_the_old_install(server: str, tmp_path: Path, capsy
     assert _tree(tmp_path) == ["ict/FaceXModel/mine.obj"]
 
 
-def test_a_cut_connection_keeps_only_verified_files(
-    server: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+@pytest.mark.parametrize(
+    ("fault", "timeout", "words"),
+    [
+        ("cut", "10", "the connection closed after 1,277,799 of 2,555,599 bytes"),
+        ("stall", "0.3", "generic_neutral_mesh.obj sent nothing for 0.3 s (on a slow network raise --timeout)"),
+    ],
+)
+def test_a_cut_or_stalled_connection_keeps_only_verified_files(
+    fault: str, timeout: str, words: str, server: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    FaultyServer.faults["/FaceXModel/generic_neutral_mesh.obj"] = "cut"
+    FaultyServer.faults["/FaceXModel/generic_neutral_mesh.obj"] = fault
     target = tmp_path / "ict"
-    assert main(_fetch(server, "-o", str(target))) == 2
+    assert main([*_fetch(server, "-o", str(target)), "--timeout", timeout]) == 2
     err = capsys.readouterr().err
-    assert "FaceXModel/generic_neutral_mesh.obj: the connection closed after 1,277,799 of 2,555,599 bytes" in err
-    assert "1 of 76 files (1 MiB) are kept" in err and "run the same command again to resume" in err
+    assert err.startswith("mien assets: error: FaceXModel/generic_neutral_mesh.obj: ") and err.count("\n") == 1
+    assert words in err and "1 of 76 files (1 MiB) are kept" in err and "run the same command again to resume" in err
     assert _tree(tmp_path) == [".ict.partial/FaceXModel/generic_neutral_mesh.obj.part", ".ict.partial/LICENSE"]
+
+
+def test_ctrl_c_keeps_the_verified_files_and_says_so(
+    server: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import mien.assets.fetch as fetch
+
+    real_hash = fetch.file_sha256
+
+    def hash_then_interrupt(path: Path) -> str:
+        if Path(path).name == "vertex_indices.json.part":
+            raise KeyboardInterrupt
+        return real_hash(path)
+
+    monkeypatch.setattr(fetch, "file_sha256", hash_then_interrupt)
+    target = tmp_path / "ict"
+    assert main(_fetch(server, "-o", str(target))) == 130
+    staging = staging_folder(target)
+    assert capsys.readouterr().err == (
+        f"the files verified so far are kept in {staging}: run the same command again to resume\ninterrupted\n"
+    )
+    assert _tree(staging) == ["FaceXModel/generic_neutral_mesh.obj", "FaceXModel/vertex_indices.json.part", "LICENSE"]
 
 
 def test_an_unreachable_server_leaves_nothing(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -204,7 +204,9 @@ def _fetch_one(url: str, staging: Path, path: str, sha256: str, commit: str, tim
     except urllib.error.URLError as exc:
         reason = getattr(exc.reason, "strerror", None) or str(exc.reason)
         raise _Cut(f"could not reach {url} ({reason}); check the network or the address (--url)") from None
-    except (TimeoutError, ConnectionError, http.client.HTTPException) as exc:
+    except TimeoutError:
+        raise _Cut(f"{path}: {url} sent nothing for {timeout_s:g} s (on a slow network raise --timeout)") from None
+    except (ConnectionError, http.client.HTTPException) as exc:
         raise _Cut(f"{path}: the transfer from {url} failed ({exc or type(exc).__name__})") from None
     except _Cut as exc:
         raise _Cut(f"{path}: {exc} ({url})") from None

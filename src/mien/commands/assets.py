@@ -157,9 +157,23 @@ def run_fetch(args: argparse.Namespace) -> int:
     name = args.name.replace("_", "-").lower()
     if name not in SOURCES:
         raise UnknownNameError("fetchable asset", args.name, tuple(SOURCES))
-    path = fetch_asset(
-        name, args.url, args.output, force=args.force, show_progress=not args.quiet, timeout_s=args.timeout
-    )
+    try:
+        path = fetch_asset(
+            name, args.url, args.output, force=args.force, show_progress=not args.quiet, timeout_s=args.timeout
+        )
+    except KeyboardInterrupt:  # Ctrl-C: the verified files stay for a resume; say so
+        import sys
+
+        from mien.assets.fetch import staging_folder
+        from mien.paths import installed_path
+
+        staging = staging_folder(args.output or installed_path(SOURCES[name].asset))
+        if staging.is_dir():
+            print(
+                f"the files verified so far are kept in {staging}: run the same command again to resume",
+                file=sys.stderr,
+            )
+        raise
     source = SOURCES[name]
     print(f"installed {name} ({source.licence} licence, {source.repository} at {source.commit[:7]}) in {path}")
     if args.output is not None:
