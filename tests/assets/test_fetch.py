@@ -185,7 +185,9 @@ def test_a_file_that_differs_or_is_missing_installs_nothing_and_leaves_nothing(
     ]
 
 
-def test_a_failed_force_keeps_the_old_install(server: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_force_replaces_an_install_only_when_the_new_one_is_complete(
+    server: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     old = tmp_path / "ict"
     (old / "FaceXModel").mkdir(parents=True)
     (old / "FaceXModel" / "mine.obj").write_text("v 0 0 0\n")
@@ -193,6 +195,9 @@ def test_a_failed_force_keeps_the_old_install(server: str, tmp_path: Path, capsy
     assert main(_fetch(server, "-o", str(old), "--force")) == 2
     assert "nothing was installed" in capsys.readouterr().err
     assert _tree(tmp_path) == ["ict/FaceXModel/mine.obj"]
+    FaultyServer.faults.clear()
+    assert main(_fetch(server, "-o", str(old), "--force")) == 0  # the old install goes once the new one is whole
+    assert _tree(tmp_path) == sorted(f"ict/{path}" for path in files_to_fetch(ICT))
 
 
 @pytest.mark.parametrize(

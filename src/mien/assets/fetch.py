@@ -163,6 +163,7 @@ def _stream(url: str, part: Path, timeout_s: float) -> Iterator[int]:
     with response:
         status = getattr(response, "status", None) or 200
         if status == 206 and not str(response.headers.get("Content-Range", "")).startswith(f"bytes {offset}-"):
+            part.unlink()  # the next try starts this file afresh
             raise _Cut(f"the server answered another byte range than {offset}-")
         if status != 206:
             offset = 0  # the server sent the whole file (it ignores Range): start again
@@ -304,7 +305,11 @@ def fetch_asset(
             previous = target.parent / f".{target.name}.previous"
             shutil.rmtree(previous, ignore_errors=True)
             target.rename(previous)
-            staging.rename(target)
+            try:
+                staging.rename(target)
+            except OSError:
+                previous.rename(target)
+                raise
             shutil.rmtree(previous, ignore_errors=True)
         else:
             staging.rename(target)
