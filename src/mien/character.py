@@ -514,7 +514,7 @@ class CharacterBatch:
             frames += saturate(expression)
         elif self._has_features:
             self.feature_weights[:] = 0.0
-        speaking = self.speech.apply(t, frames, self._laughs)  # before the laughs, which add on top
+        quiet = self.speech.apply(t, frames, self._laughs)  # before the laughs, which add on top
         laughing = None
         if self._laughs:
             laughing = np.zeros(self.n_characters, bool)
@@ -534,16 +534,16 @@ class CharacterBatch:
             if idle.moving:
                 values = frames[0].tolist()
                 mouth = max(0.0, 1.0 - max(0.0, *_MOUTH_OF(values)) / 2.0)
-                if speaking is not None:
-                    mouth *= 1.0 - float(speaking[0])
+                if quiet is not None:
+                    mouth *= float(quiet[0])
                 idle.apply_row(t, values, 0.0 if laughing is not None and laughing[0] else mouth)
                 frames[0, IDLE_COLUMNS] = _IDLE_VALUES(values)  # the rest of the row is unchanged
         else:
             mouth_scale = np.maximum(0.0, 1.0 - frames[:, _MOUTH].max(axis=1, initial=0.0) / 2.0)
             if laughing is not None:
                 mouth_scale[laughing] = 0.0
-            if speaking is not None:
-                mouth_scale *= 1.0 - speaking
+            if quiet is not None:
+                mouth_scale *= quiet
             idle.apply(t, frames, mouth_scale)
         aus = frames[:, :_N_AU]
         np.maximum(aus, 0.0, out=aus)

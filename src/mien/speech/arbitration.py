@@ -11,7 +11,7 @@ it ends; the speech keeps its clock, so the mouth comes back in sync with the so
 yields in proportion to the speaking presence, and blinks are applied after everything and always show.
 
 >>> [FACE_CHANNELS[i] for i in SPEECH_CHANNELS[:4]]
-['AU8', 'AU16L', 'AU16R', 'AU17']
+['AU16L', 'AU16R', 'AU17', 'AU18']
 >>> face = np.zeros((1, len(SPEECH_CHANNELS))); face[0, list(SPEECH_CHANNELS).index(FACE_CHANNELS.index("AU25"))] = 1.5
 >>> out = arbitrate(face, np.zeros_like(face), np.array([1.0]))   # a bilabial closure over joy's parted lips
 >>> float(out.max())
@@ -26,7 +26,16 @@ from mien.errors import InvalidValueError
 from mien.facs.catalogue import FACE_CHANNELS, au_channels
 from mien.fileio.tables import read_table, table_version
 
-__all__ = ["ARBITRATION_VERSION", "LAUGH_FADE_S", "REPLACES", "RULES", "SPEECH_CHANNELS", "arbitrate"]
+__all__ = [
+    "ARBITRATION_VERSION",
+    "LAUGH_FADE_S",
+    "REPLACES",
+    "RULES",
+    "SPAN",
+    "SPEECH_CHANNELS",
+    "arbitrate",
+    "keep_fraction",
+]
 
 _TABLE = ("mien.speech", "data/arbitration.csv")
 
@@ -57,6 +66,13 @@ SPEECH_CHANNELS: np.ndarray = _LOADED[1]
 REPLACES: np.ndarray = _LOADED[2]
 """(k,) 1.0 where speech owns the channel (``speech``), 0.0 where it adds (``add``)."""
 
+SPAN = slice(int(SPEECH_CHANNELS.min()), int(SPEECH_CHANNELS.max()) + 1)
+"""The face-frame columns from the first to the last speech channel (contiguous: AU16L..AU28), where the
+engine applies the rule in place; the columns in it that speech does not write keep exactly their value."""
+
+_REPLACES_IN_SPAN = np.zeros(SPAN.stop - SPAN.start)
+_REPLACES_IN_SPAN[SPEECH_CHANNELS - SPAN.start] = REPLACES
+
 ARBITRATION_VERSION: str = table_version(*_TABLE)
 """The ``# version:`` of the shipped arbitration table."""
 
@@ -73,5 +89,16 @@ def arbitrate(face: np.ndarray, speech: np.ndarray, presence: np.ndarray) -> np.
         shared ("add"):    face + speech
 
     so a speaking mouth closes on /p b m/ whatever the emotion opened, and a silent one is the emotion's.
+    The engine applies the same rule over :data:`SPAN` as ``face * keep_fraction(presence) + speech``.
     """
-    return face * (1.0 - presence[:, None] * REPLACES) + speech
+    return face * keep_fraction(presence, span=False) + speech
+
+
+def keep_fraction(presence: np.ndarray, span: bool = True) -> np.ndarray:
+    """(n, k) how much of the other layers' value each channel keeps: ``1 - presence * REPLACES``.
+
+    Over :data:`SPEECH_CHANNELS`, or (``span=True``) over every column of :data:`SPAN` (1 where speech does not
+    write). Linear in ``presence``, so interpolating it between two frames is interpolating the presence.
+    """
+    replaces = _REPLACES_IN_SPAN if span else REPLACES
+    return 1.0 - np.asarray(presence, dtype=np.float64)[:, None] * replaces

@@ -9,86 +9,153 @@ number of rows, then applies :func:`~mien.speech.arbitration.arbitrate`.
 from __future__ import annotations
 
 import math
+import weakref
 from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
 from mien.errors import InvalidValueError
-from mien.speech.arbitration import LAUGH_FADE_S, SPEECH_CHANNELS, arbitrate
+from mien.facs.clip import interpolate_frames
+from mien.speech.arbitration import LAUGH_FADE_S, SPAN, SPEECH_CHANNELS, keep_fraction
 from mien.speech.track import Utterance
 from mien.speech.visemes import VISEMES, viseme_aus
 
-__all__ = ["EDGE_FADE_S", "SpeechBatch", "speech_frames"]
+__all__ = ["EDGE_FADE_S", "ENGINE_FPS", "SpeechBatch", "speech_frames"]
 
 EDGE_FADE_S = 0.05
 """Seconds over which an utterance's hold on the mouth rises at its start and falls at its end (no jump)."""
 
-_K = len(SPEECH_CHANNELS)
+ENGINE_FPS = 200.0
+"""Rate (Hz) an utterance is compiled at for the engine, which takes the nearest frame at each step (within
+2.5 ms of the step's time: no interpolation, so a step is one gather and two in-place operations)."""
+
+_W = SPAN.stop - SPAN.start
 _N_VISEMES = len(VISEMES)
-_COLUMNS = _K + 1 + _N_VISEMES
+_STEP_COLUMNS = 2 * _W + 1
+"""What a step reads: speech values and keep fractions over SPAN, and the presence."""
+_COLUMNS = _STEP_COLUMNS + _N_VISEMES
+_POOL_COLUMNS = 2 * _STEP_COLUMNS + _N_VISEMES
+"""A pool row: the step columns, their slope to the next frame, the viseme weights."""
+_N_FACE = viseme_aus().shape[1]
+_IN_SPAN = SPEECH_CHANNELS - SPAN.start
+_SILENT = np.concatenate([np.zeros(_W), np.ones(_W), [1.0]])
+"""The step columns of a row that is not speaking: nothing added, everything kept, quiet."""
+_QUIET = 2 * _W
+"""The step column of ``1 - presence`` (how much the idle mouth may move)."""
+_COMPILED: weakref.WeakKeyDictionary[Utterance, np.ndarray] = weakref.WeakKeyDictionary()
+"""Each utterance compiled once (a server says the same utterance to many rows, or again and again)."""
 
 
 def speech_frames(utterance: Utterance) -> np.ndarray:
-    """(n_frames, k + 1 + 15) the utterance compiled for the engine at its track's fps.
+    """(n_frames, 2 w + 1 + 15) the utterance compiled for the engine at :data:`ENGINE_FPS` (w: the columns of
+    :data:`~mien.speech.arbitration.SPAN`), its track linearly resampled.
 
-    Columns: the speech values on :data:`~mien.speech.arbitration.SPEECH_CHANNELS` (viseme weights @ shapes),
-    the presence (1 - weight of ``sil``), the 15 viseme weights with ``sil`` excluded (zeros at rest). The
-    first and last :data:`EDGE_FADE_S` fade in and out.
+    Columns: the speech values over SPAN (viseme weights @ shapes; 0 where speech writes nothing), the
+    fraction each column keeps of the other layers (:func:`~mien.speech.arbitration.keep_fraction`),
+    ``1 - presence`` (the weight of ``sil``: how much the idle mouth may move), the 15 viseme weights with
+    ``sil`` excluded (zeros at rest). The first and last :data:`EDGE_FADE_S` fade in and out.
     """
     track = utterance.track
-    weights = np.array(track.weights)
+    n = max(1, math.floor((track.n_frames - 1) / track.fps * ENGINE_FPS + 1e-9) + 1)
+    weights = interpolate_frames(track.weights, track.fps, np.arange(n) / ENGINE_FPS)
     weights[:, VISEMES.index("sil")] = 0.0
-    n = track.n_frames
-    ramp_frames = max(1.0, EDGE_FADE_S * track.fps)
+    ramp_frames = max(1.0, EDGE_FADE_S * ENGINE_FPS)
     index = np.arange(n, dtype=np.float64)
     taper = np.clip(np.minimum(index, n - 1 - index) / ramp_frames, 0.0, 1.0)
     weights *= taper[:, None]
-    out = np.empty((n, _COLUMNS))
-    out[:, :_K] = weights @ viseme_aus()[:, SPEECH_CHANNELS]
-    out[:, _K] = weights.sum(axis=1)
-    out[:, _K + 1 :] = weights
+    presence = weights.sum(axis=1)
+    out = np.zeros((n, _COLUMNS))
+    out[:, _IN_SPAN] = weights @ viseme_aus()[:, SPEECH_CHANNELS]
+    out[:, _W : 2 * _W] = keep_fraction(presence)
+    out[:, _QUIET] = 1.0 - presence
+    out[:, _STEP_COLUMNS:] = weights
     return out
 
 
 class SpeechBatch:
-    """The speech state of n character rows (see the module docstring)."""
+    """The speech state of n character rows (see the module docstring).
+
+    Each utterance is compiled once (:func:`speech_frames`, cached per utterance) into a shared pool: one row
+    per track frame holding the step columns and their slope to the next frame (so a step interpolates with
+    one gather, one multiply and one add), and a parallel pool of viseme weights read only when
+    :attr:`viseme_weights` is. Pool row 0 is silence: when half the rows or more speak, every row takes part
+    in the pass (the silent ones read row 0) and the rule is applied in place on ``frames[:, SPAN]``.
+    """
 
     def __init__(self, n: int) -> None:
         self.fps = np.zeros(n)
+        """(n,) frame rate of each row's utterance track (0: silent)."""
         self._start = np.zeros(n)
         self._offset = np.zeros(n, np.int64)
         self._last = np.zeros(n, np.int64)
         self._utterances: dict[int, Utterance] = {}
         self._spans: dict[int, tuple[int, int]] = {}
-        self._pool = np.zeros((0, _COLUMNS))
-        self._used = 0
-        self._speaking = np.zeros(0, np.intp)
-        self.presence = np.zeros(n)
+        self._stored: dict[Utterance, tuple[int, int]] = {}
+        self._pool, self._pool_visemes = _silent_pools(1024)
+        self._used = 1
+        self._quiet = np.ones(n)
+        self._visemes = np.zeros((n, _N_VISEMES))
+        self._last_step: tuple[np.ndarray, np.ndarray, np.ndarray | None] | None = None
+        self._visemes_read = False
+        self._every_row = False
+        self._rows = np.zeros(0, np.intp)
+        self._position_of: dict[int, int] | None = {}
+        self._rows_fps = self._rows_shift = np.zeros(0)
+        self._rows_base = self._rows_last = np.zeros(0, np.int64)
+        self._all_live = (0.0, -1.0)
+        self._refresh()
+
+    @property
+    def presence(self) -> np.ndarray:
         """(n,) how much speech held each row's mouth at the last step, 0..1 (0: silent)."""
-        self.viseme_weights = np.zeros((n, _N_VISEMES))
+        return 1.0 - self._quiet
+
+    @property
+    def viseme_weights(self) -> np.ndarray:
         """(n, 15) viseme weights of the last step (``sil`` column 0; zeros where a row is silent): for heads
-        with their own viseme shapes (:func:`~mien.speech.visemes.rig_viseme_targets`)."""
+        with their own viseme shapes (:func:`~mien.speech.visemes.rig_viseme_targets`). Built when read."""
+        self._visemes_read = True
+        if self._last_step is not None:
+            rows, index, live = self._last_step
+            self._last_step = None
+            weights = self._pool_visemes[index]
+            if live is not None:
+                weights *= live[:, None]
+            self._visemes[:] = 0.0
+            self._visemes[rows] = weights
+        return self._visemes
+
+    def _settle(self) -> None:
+        """Fix the last step's viseme weights before rows or the pool change (only once someone reads them)."""
+        if self._visemes_read:
+            _ = self.viseme_weights
+        self._last_step = None
 
     # ------------------------------------------------------------------ rows
 
     def add_rows(self, k: int) -> None:
         """Append ``k`` silent rows."""
+        self._settle()
         self.fps = np.concatenate([self.fps, np.zeros(k)])
         self._start = np.concatenate([self._start, np.zeros(k)])
         self._offset = np.concatenate([self._offset, np.zeros(k, np.int64)])
         self._last = np.concatenate([self._last, np.zeros(k, np.int64)])
-        self.presence = np.concatenate([self.presence, np.zeros(k)])
-        self.viseme_weights = np.concatenate([self.viseme_weights, np.zeros((k, _N_VISEMES))])
+        self._quiet = np.concatenate([self._quiet, np.ones(k)])
+        self._visemes = np.concatenate([self._visemes, np.zeros((k, _N_VISEMES))])
+        self._refresh()
 
     def reset_rows(self, rows: np.ndarray) -> None:
         """Silence ``rows`` (their utterances are dropped)."""
+        self._settle()
+        self._visemes[rows] = 0.0
         for row in np.asarray(rows).tolist():
             self._utterances.pop(row, None)
             self._spans.pop(row, None)
-        self.presence[rows] = 0.0
-        self.viseme_weights[rows] = 0.0
-        self._speaking = np.array(sorted(self._spans), np.intp)
+            self.fps[row] = self._start[row] = 0.0
+            self._offset[row] = self._last[row] = 0  # a silent row reads pool row 0
+        self._quiet[rows] = 1.0
+        self._refresh(np.asarray(rows).ravel())
 
     def utterance(self, row: int) -> Utterance | None:
         """The utterance ``row`` is saying (or will say), if any."""
@@ -101,38 +168,81 @@ class SpeechBatch:
         start = float(start_s)
         if not math.isfinite(start):
             raise InvalidValueError("start_s", start_s, "a finite time in seconds")
-        frames = speech_frames(utterance)
-        offset = self._store(frames)
+        frames = _COMPILED.get(utterance)
+        if frames is None:
+            frames = _COMPILED[utterance] = speech_frames(utterance)
+        self._settle()  # the pool may move
+        stored = self._stored.get(utterance)
+        offset = stored[0] if stored is not None and stored in self._spans.values() else self._store(frames)
+        self._stored[utterance] = (offset, frames.shape[0])
         for row in np.asarray(rows).tolist():
             self._utterances[row] = utterance
             self._spans[row] = (offset, frames.shape[0])
             self._start[row] = start
             self._offset[row] = offset
             self._last[row] = frames.shape[0] - 1
-            self.fps[row] = utterance.track.fps
-        self._speaking = np.array(sorted(self._spans), np.intp)
+            self.fps[row] = ENGINE_FPS
+        self._refresh(np.asarray(rows).ravel())
 
     def _store(self, frames: np.ndarray) -> int:
-        """Copy ``frames`` into the pool and return their first row (compacting or growing the pool)."""
+        """Copy ``frames`` into the pools and return their first row (compacting or growing the pools)."""
         need = frames.shape[0]
         if self._used + need > self._pool.shape[0]:
-            live = {span for span in self._spans.values()}
-            size = sum(length for _, length in live) + need
-            pool = np.zeros((max(2 * size, 1024), _COLUMNS))
+            live = set(self._spans.values())
+            size = 1 + sum(length for _, length in live) + need
+            pool, visemes = _silent_pools(max(2 * size, 1024))
             moved: dict[tuple[int, int], int] = {}
-            used = 0
+            used = 1
             for offset, length in sorted(live):
                 pool[used : used + length] = self._pool[offset : offset + length]
+                visemes[used : used + length] = self._pool_visemes[offset : offset + length]
                 moved[(offset, length)] = used
                 used += length
             for row, (offset, length) in list(self._spans.items()):
                 self._spans[row] = (moved[(offset, length)], length)
                 self._offset[row] = moved[(offset, length)]
-            self._pool, self._used = pool, used
+            self._stored = {u: (moved[span], span[1]) for u, span in self._stored.items() if span in moved}
+            self._pool, self._pool_visemes, self._used = pool, visemes, used
         offset = self._used
-        self._pool[offset : offset + need] = frames
+        self._pool[offset : offset + need] = frames[:, :_STEP_COLUMNS]
+        self._pool_visemes[offset : offset + need] = frames[:, _STEP_COLUMNS:]
         self._used += need
         return offset
+
+    def _refresh(self, changed: np.ndarray | None = None) -> None:
+        """Cache the taking-part rows' arrays (in row order) for :meth:`apply`; only the ``changed`` rows when
+        every row already takes part and still does (one say or one finished utterance costs O(1))."""
+        n = self._quiet.shape[0]
+        every_row = 0 < 2 * len(self._spans) and 2 * len(self._spans) >= n
+        if changed is not None and every_row and self._every_row and self._rows.size == n:
+            self._rows_fps[changed] = self.fps[changed]
+            self._rows_base[changed] = self._offset[changed]
+            self._rows_last[changed] = self._last[changed]
+            self._rows_shift[changed] = self._start[changed] * self.fps[changed] - self._offset[changed] - 0.5
+        else:
+            self._every_row = every_row
+            # with half the rows or more speaking, every row takes part (a silent one reads pool row 0):
+            # frames[:, SPAN] is then a view, updated in place, with no gather and scatter of rows
+            rows = np.arange(n) if every_row else np.array(sorted(self._spans), np.intp)
+            self._rows = rows
+            self._position_of = None if every_row else {row: i for i, row in enumerate(rows.tolist())}
+            self._rows_fps = self.fps[rows]
+            self._rows_base = self._offset[rows]
+            self._rows_last = self._last[rows]
+            # nearest pool row at t: floor(t * fps - (start * fps - offset - 0.5)), one multiply and one subtract
+            self._rows_shift = self._start[rows] * self._rows_fps - self._rows_base - 0.5
+        speaking = self.fps > 0
+        if speaking.any():
+            ends = self._start[speaking] + self._last[speaking] / self.fps[speaking]
+            self._all_live = (float(self._start[speaking].max()), float(ends.min()))
+        else:
+            self._all_live = (0.0, -1.0)
+
+    def _position(self, row: int) -> int | None:
+        """Index of a speaking ``row`` among the rows taking part in a step (None if it is silent)."""
+        if self.fps[row] <= 0:
+            return None
+        return row if self._position_of is None else self._position_of.get(row)
 
     # ------------------------------------------------------------------ step
 
@@ -141,38 +251,61 @@ class SpeechBatch:
     ) -> np.ndarray | None:
         """Blend the speaking rows' speech into ``frames`` (n, 62) at ``t_s``, in place.
 
+        The rule is :func:`~mien.speech.arbitration.arbitrate`'s, compiled: ``face * keep + speech`` over
+        :data:`~mien.speech.arbitration.SPAN`, both read from the utterance's frames and interpolated.
         ``laughs``: row -> active laughs (objects with ``start_s`` and ``end_s``): speech fades out over
-        :data:`~mien.speech.arbitration.LAUGH_FADE_S` around each. Returns :attr:`presence` (for the idle
-        layer to yield), or None when no row is speaking. Finished utterances are dropped.
+        :data:`~mien.speech.arbitration.LAUGH_FADE_S` around each. Returns (n,) ``1 - presence`` per row (how
+        much the idle mouth may move), or None when no row is speaking. Finished utterances are dropped.
         """
-        rows = self._speaking
-        if rows.size == 0:
+        rows = self._rows
+        if not self._spans:
             return None
-        position = (t_s - self._start[rows]) * self.fps[rows]
-        last = self._last[rows]
-        live = (position >= 0.0) & (position <= last)
-        clipped = np.clip(position, 0.0, last)
-        low = np.floor(clipped).astype(np.int64)
-        high = np.minimum(low + 1, last)
-        fraction = (clipped - low)[:, None]
-        pool = self._pool
-        base = self._offset[rows]
-        before = pool[base + low]
-        values = before + fraction * (pool[base + high] - before)
-        values[~live] = 0.0
+        position = t_s * self._rows_fps - self._rows_shift  # pool row + 0.5: floor is the nearest row
+        live = None
+        if not self._all_live[0] <= t_s <= self._all_live[1]:  # some row not started or finished: clip, mask
+            first, last = self._rows_base, self._rows_base + self._rows_last
+            live = (position >= first) & (position < last + 1)
+            position = np.minimum(np.maximum(position, first), last)
+        index = position.astype(np.int64)  # floor: position >= 0
+        values = self._pool[index]
+        if live is not None:
+            values[~live] = _SILENT
         if laughs:
-            for i, row in enumerate(rows.tolist()):
-                if row in laughs:
-                    cover = max(_cover(t_s, laugh.start_s, laugh.end_s) for laugh in laughs[row])
-                    values[i] *= 1.0 - cover
-        presence = values[:, _K]
-        block = np.ix_(rows, SPEECH_CHANNELS)
-        frames[block] = arbitrate(frames[block], values[:, :_K], presence)
-        self.presence[rows] = presence
-        self.viseme_weights[rows] = values[:, _K + 1 :]
-        if (position > last).any():
-            self.reset_rows(rows[position > last])
-        return self.presence
+            covered = [(i, row) for row in laughs if (i := self._position(row)) is not None]
+            if covered:
+                # every step column is affine in the presence, equal to _SILENT at 0: scaling the presence by
+                # hold is _SILENT + hold * (values - _SILENT), for the speech values, the keep and the quiet alike
+                ids = [i for i, _ in covered]
+                hold = [
+                    1.0 - max(_cover(t_s, laugh.start_s, laugh.end_s) for laugh in laughs[row]) for _, row in covered
+                ]
+                values[ids] = _SILENT + np.array(hold)[:, None] * (values[ids] - _SILENT)
+        if self._every_row and frames.shape[0] == rows.size:
+            block = frames[:, SPAN]  # a view: the rule applied in place
+            block *= values[:, _W : 2 * _W]
+            block += values[:, :_W]
+            quiet = values[:, _QUIET]
+            self._quiet = quiet
+        else:
+            block = frames[rows, SPAN]
+            block *= values[:, _W : 2 * _W]
+            block += values[:, :_W]
+            frames[rows, SPAN] = block
+            quiet = self._quiet
+            quiet[rows] = values[:, _QUIET]
+        self._last_step = (rows, index, live)
+        if live is not None and not live.all():
+            finished = (position >= self._rows_base + self._rows_last) & ~live & (self._rows_fps > 0)  # past the end
+            if finished.any():
+                self.reset_rows(rows[finished])
+        return self._quiet
+
+
+def _silent_pools(n_rows: int) -> tuple[np.ndarray, np.ndarray]:
+    """Pools of ``n_rows`` rows (step columns; viseme weights) whose row 0 is silence."""
+    pool = np.zeros((n_rows, _STEP_COLUMNS))
+    pool[0] = _SILENT
+    return pool, np.zeros((n_rows, _N_VISEMES))
 
 
 def _cover(t_s: float, start_s: float, end_s: float) -> float:
