@@ -34,7 +34,8 @@ class FaultyServer(http.server.SimpleHTTPRequestHandler):
 
     faults: dict[str, str] = {}  # noqa: RUF012 (one table shared by the handler instances, reset per test)
     """``"404"``, ``"differ"`` (one byte flipped), ``"cut"`` (half the body, then the connection closes),
-    ``"cut once"`` (a cut on the first request only), ``"stall"`` (half the body, then a 1 s silence)."""
+    ``"cut once"`` (a cut on the first request only), ``"stall"`` (half the body, then a 1 s silence),
+    ``"whole"`` (the whole file, whatever the Range header asks)."""
     requests: list[tuple[str, str | None]] = []  # noqa: RUF012
     """(URL path, Range header) of every request, in order."""
 
@@ -54,7 +55,7 @@ class FaultyServer(http.server.SimpleHTTPRequestHandler):
         data = local.read_bytes()
         if fault == "differ":
             data = bytes([data[0] ^ 1]) + data[1:]
-        ranged = re.fullmatch(r"bytes=(\d+)-", self.headers.get("Range") or "")
+        ranged = None if fault == "whole" else re.fullmatch(r"bytes=(\d+)-", self.headers.get("Range") or "")
         start = int(ranged[1]) if ranged else 0
         if start >= len(data) > 0:
             self.send_error(416)
@@ -219,19 +220,34 @@ def test_a_cut_or_stalled_connection_keeps_only_verified_files(
     assert _tree(tmp_path) == [".ict.partial/FaceXModel/generic_neutral_mesh.obj.part", ".ict.partial/LICENSE"]
 
 
+def test_a_server_that_ignores_range_restarts_the_partial_file(
+    server: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    target = tmp_path / "ict"
+    fourth = files_to_fetch(ICT)[3]
+    FaultyServer.faults.update({f"/{THIRD}": "cut", f"/{fourth}": "404"})
+    assert main(_fetch(server, "-o", str(target))) == 2
+    assert "kept" in capsys.readouterr().err
+    FaultyServer.faults[f"/{THIRD}"] = "whole"
+    FaultyServer.requests.clear()
+    assert main(_fetch(server, "-o", str(target))) == 2  # stops at the fourth file, after the third is verified
+    assert "HTTP 404" in capsys.readouterr().err
+    half = "bytes=82026-"
+    assert FaultyServer.requests == [(f"/{THIRD}", half), (f"/{fourth}", None)]
+    assert not target.exists() and not staging_folder(target).exists()  # a 404 leaves nothing
+
+
 def test_ctrl_c_keeps_the_verified_files_and_says_so(
     server: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    import mien.assets.fetch as fetch
+    real_rename = pathlib.Path.rename
 
-    real_hash = fetch.file_sha256
-
-    def hash_then_interrupt(path: Path) -> str:
-        if Path(path).name == "vertex_indices.json.part":
+    def interrupted_rename(self: Path, target: Any) -> Any:
+        if self.name == "vertex_indices.json.part":  # Ctrl-C as the third file is done
             raise KeyboardInterrupt
-        return real_hash(path)
+        return real_rename(self, target)
 
-    monkeypatch.setattr(fetch, "file_sha256", hash_then_interrupt)
+    monkeypatch.setattr(pathlib.Path, "rename", interrupted_rename)
     target = tmp_path / "ict"
     assert main(_fetch(server, "-o", str(target))) == 130
     staging = staging_folder(target)

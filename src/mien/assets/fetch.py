@@ -16,6 +16,7 @@ disk) removes the staging folder: nothing is left behind.
 
 from __future__ import annotations
 
+import hashlib
 import http.client
 import math
 import os
@@ -25,7 +26,7 @@ import tempfile
 import tomllib
 import urllib.error
 import urllib.request
-from collections.abc import Iterator
+from collections.abc import Generator, Iterator
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -147,9 +148,10 @@ def _check_base_url(url: str) -> str:
     return url.rstrip("/")
 
 
-def _stream(url: str, part: Path, timeout_s: float) -> Iterator[int]:
+def _stream(url: str, part: Path, timeout_s: float) -> Generator[int, None, str]:
     """Download ``url`` into ``part``, continuing after its present bytes with a Range request; yields the
-    bytes written per block. Raises :class:`_Cut` on a body shorter than announced."""
+    bytes written per block and returns the SHA-256 (hex) of the whole file, hashed as it streams.
+    Raises :class:`_Cut` on a body shorter than announced."""
     offset = part.stat().st_size if part.exists() else 0
     headers = {"User-Agent": "mien-assets-fetch"}
     if offset:
@@ -158,7 +160,7 @@ def _stream(url: str, part: Path, timeout_s: float) -> Iterator[int]:
         response = urllib.request.urlopen(urllib.request.Request(url, headers=headers), timeout=timeout_s)
     except urllib.error.HTTPError as exc:
         if exc.code == 416 and offset:  # the partial file is already whole: its hash decides
-            return
+            return file_sha256(part)
         raise
     with response:
         status = getattr(response, "status", None) or 200
@@ -167,6 +169,11 @@ def _stream(url: str, part: Path, timeout_s: float) -> Iterator[int]:
             raise _Cut(f"the server answered another byte range than {offset}-")
         if status != 206:
             offset = 0  # the server sent the whole file (it ignores Range): start again
+        digest = hashlib.sha256()
+        if offset:
+            with part.open("rb") as kept:
+                for block in iter(lambda: kept.read(CHUNK_BYTES), b""):
+                    digest.update(block)
         length = response.headers.get("Content-Length")
         expected = offset + int(length) if length and length.isdigit() else None
         written = offset
@@ -182,10 +189,12 @@ def _stream(url: str, part: Path, timeout_s: float) -> Iterator[int]:
                         view = view[handle.write(view) :]
                 except OSError as exc:
                     raise _Fatal(f"could not write {part} ({exc.strerror or exc})") from None
+                digest.update(block)
                 written += len(block)
                 yield len(block)
         if expected is not None and written < expected:
             raise _Cut(f"the connection closed after {written:,} of {expected:,} bytes")
+    return digest.hexdigest()
 
 
 def _fetch_one(url: str, staging: Path, path: str, sha256: str, commit: str, timeout_s: float) -> Iterator[int]:
@@ -194,7 +203,7 @@ def _fetch_one(url: str, staging: Path, path: str, sha256: str, commit: str, tim
     part = final.with_name(final.name + ".part")
     try:
         final.parent.mkdir(parents=True, exist_ok=True)
-        yield from _stream(url, part, timeout_s)
+        measured = yield from _stream(url, part, timeout_s)
     except urllib.error.HTTPError as exc:
         what = f"{path}: the server answered HTTP {exc.code} {exc.reason} for {url}"
         if exc.code >= 500 or exc.code in (408, 429):
@@ -213,7 +222,6 @@ def _fetch_one(url: str, staging: Path, path: str, sha256: str, commit: str, tim
         raise _Cut(f"{path}: {exc} ({url})") from None
     except OSError as exc:  # the staging folder itself (mkdir)
         raise _Fatal(f"could not write {final.parent} ({exc.strerror or exc})") from None
-    measured = file_sha256(part)
     if measured != sha256:
         raise _Fatal(
             f"{path} from {url} has SHA-256 {measured}, not the {sha256} recorded for commit {commit[:7]}: "
