@@ -106,3 +106,27 @@ def test_speech_channels_are_the_mouth() -> None:
     names = {FACE_CHANNELS[i] for i in SPEECH_CHANNELS}
     assert {"AU25", "AU26", "AU27", "AU18", "AU22", "AU24L", "AU24R", "AU20L"} <= names
     assert not names & {"AU1L", "AU4L", "AU5L", "AU6L", "AU7L", "AU9L", "AU10L", "AU12L", "AU15L", "AU45L"}
+
+
+def test_banded_coarticulation_equals_the_dominance_formula() -> None:
+    """The banded sum is Cohen & Massaro's weighted mean over every segment (with the implicit rests), computed
+    directly here on random timings."""
+    from mien.speech.visemes import viseme_dominance
+
+    rng = np.random.default_rng(2)
+    durations = rng.uniform(0.02, 0.2, 60)
+    edges = np.concatenate([[0.1], 0.1 + np.cumsum(durations)])
+    segments = [
+        Segment(a, b, VISEMES[v]) for a, b, v in zip(edges[:-1], edges[1:], rng.integers(0, 15, 60), strict=True)
+    ]
+    track = coarticulate(segments)
+    alpha, theta, min_s = viseme_dominance()
+    times = np.arange(track.n_frames) / track.fps
+    expected = np.zeros_like(track.weights)
+    rests = [(-1e9, edges[0], 0), (edges[-1], 1e9, 0)]
+    for s in [(x.start_s, x.end_s, VISEMES.index(x.viseme)) for x in segments] + rests:
+        widen = max(0.0, min_s[s[2]] - (s[1] - s[0])) / 2
+        distance = np.maximum(0.0, np.maximum(s[0] - widen - times, times - s[1] - widen))
+        expected[:, s[2]] += alpha[s[2]] * np.exp(-theta[s[2]] * distance)
+    expected /= expected.sum(axis=1, keepdims=True)
+    assert np.abs(track.weights - expected).max() < 1e-5

@@ -41,6 +41,8 @@ _N_FACE = viseme_aus().shape[1]
 _IN_SPAN = SPEECH_CHANNELS - SPAN.start
 _SILENT = np.concatenate([np.zeros(_W), np.ones(_W), [1.0]])
 """The step columns of a row that is not speaking: nothing added, everything kept, quiet."""
+_SHAPES = np.ascontiguousarray(viseme_aus()[:, SPEECH_CHANNELS])
+"""(15, k) the visemes' shapes on the speech channels (C order: the product is 10x faster)."""
 _QUIET = 2 * _W
 """The step column of ``1 - presence`` (how much the idle mouth may move)."""
 _COMPILED: weakref.WeakKeyDictionary[Utterance, np.ndarray] = weakref.WeakKeyDictionary()
@@ -66,7 +68,7 @@ def speech_frames(utterance: Utterance) -> np.ndarray:
     weights *= taper[:, None]
     presence = weights.sum(axis=1)
     out = np.zeros((n, _COLUMNS))
-    out[:, _IN_SPAN] = weights @ viseme_aus()[:, SPEECH_CHANNELS]
+    out[:, _IN_SPAN] = weights @ _SHAPES
     out[:, _W : 2 * _W] = keep_fraction(presence)
     out[:, _QUIET] = 1.0 - presence
     out[:, _STEP_COLUMNS:] = weights

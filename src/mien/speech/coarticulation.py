@@ -33,12 +33,13 @@ from mien.errors import InvalidValueError
 from mien.speech.track import TRACK_FPS, Segment, VisemeTrack
 from mien.speech.visemes import VISEMES, check_viseme, viseme_dominance
 
-__all__ = ["TAIL_S", "coarticulate"]
+__all__ = ["NEGLIGIBLE", "TAIL_S", "coarticulate"]
 
 TAIL_S = 0.2
 """Seconds of rest after the last segment, so the mouth closes before the track ends."""
 
-_FAR_S = 1e6
+NEGLIGIBLE = 1e-6
+"""A dominance under this fraction of the weakest alpha is left out (see :func:`coarticulate`)."""
 
 
 def coarticulate(segments: Sequence[Segment], fps: float = TRACK_FPS, duration_s: float | None = None) -> VisemeTrack:
@@ -51,17 +52,35 @@ def coarticulate(segments: Sequence[Segment], fps: float = TRACK_FPS, duration_s
         raise InvalidValueError("segments", [], "at least one timed speech segment")
     if not (math.isfinite(fps) and fps > 0):
         raise InvalidValueError("fps", fps, "a positive frame rate")
-    starts = np.array([s.start_s for s in segments] + [-_FAR_S, segments[-1].end_s])
-    ends = np.array([s.end_s for s in segments] + [segments[0].start_s, _FAR_S])
-    ids = np.array([check_viseme(s.viseme) for s in segments] + [0, 0])
+    starts = np.array([s.start_s for s in segments])
+    ends = np.array([s.end_s for s in segments])
+    ids = np.array([check_viseme(s.viseme) for s in segments])
     end_s = segments[-1].end_s + TAIL_S if duration_s is None else float(duration_s)
     n = max(1, math.ceil(end_s * fps - 1e-9) + 1)
     times = np.arange(n) / fps
     alpha, theta, min_s = viseme_dominance()
     widen = np.maximum(0.0, min_s[ids] - (ends - starts)) / 2.0  # short closures held min_s about their centre
-    starts, ends = starts - widen, ends + widen
-    distance = np.maximum(0.0, np.maximum(starts[None, :] - times[:, None], times[:, None] - ends[None, :]))
-    dominance = alpha[ids] * np.exp(-theta[ids] * distance)
-    weights = dominance @ np.eye(len(VISEMES))[ids]  # weights[:, v] = sum of the dominances of v's segments
+    # a segment's reach: beyond it its dominance is under NEGLIGIBLE of the weakest alpha, so each frame sums
+    # only the k segments within reach (banded, O(frames x k) instead of O(frames x segments))
+    reach = math.log(float(alpha.max()) / (NEGLIGIBLE * float(alpha.min()))) / float(theta.min()) + float(widen.max())
+    first = np.searchsorted(np.maximum.accumulate(ends), times - reach)
+    stop = np.searchsorted(starts, times + reach, side="right")
+    k = max(1, int((stop - first).max()))
+    band = np.minimum(first[:, None] + np.arange(k), len(segments) - 1)
+    inside = first[:, None] + np.arange(k) < stop[:, None]
+    band_ids = ids[band]
+    distance = np.maximum(
+        0.0, np.maximum(starts[band] - widen[band] - times[:, None], times[:, None] - ends[band] - widen[band])
+    )
+    dominance = np.where(inside, alpha[band_ids] * np.exp(-theta[band_ids] * distance), 0.0)
+    weights = np.zeros((n, len(VISEMES)))
+    frame = np.arange(n)
+    for column in range(k):
+        weights[frame, band_ids[:, column]] += dominance[:, column]  # one segment per frame in a column
+    # the rest before the first and after the last segment (an implicit sil reaching to +-infinity)
+    silence = VISEMES.index("sil")
+    before = np.maximum(0.0, times - starts[0])
+    after = np.maximum(0.0, ends[-1] - times)
+    weights[:, silence] += alpha[silence] * (np.exp(-theta[silence] * before) + np.exp(-theta[silence] * after))
     weights /= weights.sum(axis=1, keepdims=True)
     return VisemeTrack(weights, fps)

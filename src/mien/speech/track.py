@@ -151,9 +151,8 @@ class Utterance:
 
     def face_clip(self, fps: float | None = None) -> Clip:
         """The speech alone on a neutral face as a (n, 62) AU clip, resampled to ``fps`` if given."""
-        clip = self.track.face_clip()
         if fps is None:
-            return clip
+            return self.track.face_clip()
         n = max(1, math.floor(self.duration_s * fps) + 1)
-        values = interpolate_frames(clip.values, clip.fps, np.arange(n) / fps)
-        return Clip(values, fps, FACE_CHANNELS)
+        weights = interpolate_frames(self.track.weights, self.track.fps, np.arange(n) / fps)
+        return Clip(weights @ viseme_aus(), fps, FACE_CHANNELS)  # the shapes are linear in the weights
