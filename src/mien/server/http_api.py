@@ -464,7 +464,7 @@ def create_app(server: RunningServer, access: AccessPolicy | None = None) -> Fas
     @app.get("/api/characters/{character_id}/speech", response_model=SpeechInfo, dependencies=api,
              responses=_ERRORS)  # fmt: skip
     async def character_speech(character_id: str) -> SpeechInfo:
-        """The utterance the character is saying now (404: silent)."""
+        """The utterance the character is saying or about to say (404: silent)."""
         entry = entry_of(character_id)
         spoken = registry.speech.playing(entry.spec.id, registry.time_s)
         if spoken is None:

@@ -370,7 +370,7 @@ class Registry:
                 busy.append(entry)
         if states:
             self._apply_states(states)  # events touch no held target, so the states can all go first
-        self.speech.deliver(partial(self._start_speech, t_s), self.reject, t_s)
+        self.speech.deliver(self._start_speech, self.reject, t_s)
         for entry in busy:
             while entry.events:
                 message = entry.events.popleft()
@@ -379,13 +379,13 @@ class Registry:
                 clip = entry.clips.pop(0)
                 self._guarded(entry, False, partial(self.batch.play_clip, entry.row, clip, start_s=t_s))
 
-    def _start_speech(self, t_s: float, character_id: str, utterance: Any) -> bool:
-        """Start ``utterance`` on ``character_id``'s row at ``t_s`` (False: no such character, or refused)."""
+    def _start_speech(self, character_id: str, utterance: Any, start_s: float) -> bool:
+        """Put ``utterance`` on ``character_id``'s row from ``start_s`` (False: no such character, or refused)."""
         entry = self.entries.get(character_id)
         if entry is None:
             return False
         try:
-            self.batch.say(entry.row, utterance, start_s=t_s)
+            self.batch.say(entry.row, utterance, start_s=start_s)
         except MienError as exc:
             self.reject(MessageRejected(Rejection.ENGINE_ERROR, f"{character_id}: say: {exc}"))
             return False

@@ -3,10 +3,11 @@
 A ``say`` (UDP, WebSocket or HTTP; :func:`mien.server.protocol.parse_message`) is checked on arrival
 (:meth:`SpeechService.check`: a TTS is installed, the language has a voice) and handed to one worker thread
 (:meth:`SpeechService.request`), which runs espeak-ng (:func:`mien.speech.espeak.speak`, 10-100 ms a sentence)
-and encodes the sound as WAV: the 60 Hz tick never waits on it. The first tick after it is done starts the
+and encodes the sound as WAV: the 60 Hz tick never waits on it. The first tick after it is done puts the
 utterance on the character's row (:meth:`SpeechService.deliver`, called by
-:meth:`mien.server.registry.Registry.apply_pending`) at that tick's server time, so the face and the sound share
-the server clock: the character keeps its clock whatever the TTS costs.
+:meth:`mien.server.registry.Registry.apply_pending`) to start :data:`ANNOUNCE_LEAD_S` later on the server clock,
+and announces it at once, so viewers have that long to fetch the sound and start it with the face's first
+viseme. The face and the sound share the server clock: the character keeps its clock whatever the TTS costs.
 
 Each started utterance is a :class:`Spoken`: its sound is served as ``GET /api/speech/{id}.wav`` and
 announced to the character's WebSocket viewers as a text message (:meth:`Spoken.announcement`)::
@@ -40,13 +41,17 @@ import numpy as np
 from mien.errors import MienError, MissingAssetError, UnknownNameError
 from mien.server.protocol import MessageRejected, Rejection, SayRequest
 
-__all__ = ["KEPT_UTTERANCES", "MAX_PENDING_SAYS", "SpeechService", "Spoken", "wav_bytes"]
+__all__ = ["ANNOUNCE_LEAD_S", "KEPT_UTTERANCES", "MAX_PENDING_SAYS", "SpeechService", "Spoken", "wav_bytes"]
 
 log = logging.getLogger("mien.server")
 
 MAX_PENDING_SAYS = 8
 """``say`` commands waiting for the TTS worker at once, all characters together; more are refused
 (``speech_busy``) rather than queued without end."""
+
+ANNOUNCE_LEAD_S = 0.2
+"""Seconds between an utterance's announcement and its start on the server clock: time for a viewer to fetch
+and decode the sound (a few tens of ms on a LAN) so that it starts with the face, not skipped into."""
 
 KEPT_UTTERANCES = 32
 """Newest utterances whose sound the server keeps for ``GET /api/speech/{id}.wav`` (about 1 MB each at most)."""
@@ -223,18 +228,23 @@ class SpeechService:
 
     # ------------------------------------------------------------------ the clock
 
-    def deliver(self, start: Callable[[str, Any], bool], reject: Callable[[MessageRejected], None], t_s: float) -> None:
-        """Start the utterances the worker finished, at server time ``t_s`` (the clock's thread, between ticks):
-        ``start(character_id, utterance)`` puts it on the character's row (False: the character is gone);
-        a failed synthesis is ``reject``-ed (counted)."""
+    def deliver(
+        self, start: Callable[[str, Any, float], bool], reject: Callable[[MessageRejected], None], t_s: float
+    ) -> None:
+        """Hand on the utterances the worker finished at server time ``t_s`` (the clock's thread, between ticks):
+        ``start(character_id, utterance, start_s)`` puts each on the character's row from ``start_s = t_s +``
+        :data:`ANNOUNCE_LEAD_S` (False: the character is gone), then the listeners announce it; a failed
+        synthesis is ``reject``-ed (counted)."""
         while self._done:
             done = self._done.popleft()
             if done.error is not None:
                 reject(done.error)
                 continue
-            if not start(done.character, done.utterance):
+            start_s = t_s + ANNOUNCE_LEAD_S
+            if not start(done.character, done.utterance, start_s):
                 continue
-            spoken = Spoken(done.id, done.character, t_s, float(done.utterance.duration_s), done.say.text, done.wav)
+            duration = float(done.utterance.duration_s)
+            spoken = Spoken(done.id, done.character, start_s, duration, done.say.text, done.wav)
             self._kept[spoken.id] = spoken
             while len(self._kept) > KEPT_UTTERANCES:
                 self._kept.popitem(last=False)
@@ -249,10 +259,10 @@ class SpeechService:
         return self._kept.get(utterance_id)
 
     def playing(self, character_id: str, t_s: float) -> Spoken | None:
-        """The utterance ``character_id`` is saying at server time ``t_s``, or None."""
+        """The utterance ``character_id`` is saying, or about to say, at server time ``t_s``, or None."""
         for spoken in reversed(self._kept.values()):
             if spoken.character == character_id:
-                return spoken if spoken.start_s <= t_s < spoken.start_s + spoken.duration_s else None
+                return spoken if t_s < spoken.start_s + spoken.duration_s else None
         return None
 
     def pending(self) -> int:

@@ -14,6 +14,7 @@ import { MeshoptDecoder } from "three/addons/libs/meshopt_decoder.module.js";
 import { OrbitControls } from "three/addons/controls/OrbitControls.js";
 import { decodeFrame } from "./frame.js";
 import { framedTurn, poseNodeRole, poseQuaternion, vrmPoseNodes } from "./pose.js";
+import { SpeechPlayer, frameAt } from "./speech.js";
 
 const params = new URLSearchParams(location.search);
 const token = params.get("token") || "";
@@ -37,6 +38,10 @@ const state = {
   needsRender: true,
   renders: 0,
   loadingHead: null,
+  speech: null, // the SpeechPlayer: each announced utterance's sound, in step with the frames (speech.js)
+  speechLog: [], // while a sound plays, per animation frame (server seconds): the shown frame's time, the sound's
+  //                and the next received frame's (null: none yet) { frameS, soundS, nextS }, the newest 2000
+  recent: [], // the frames of the last 2 s, oldest first: while a sound plays, the face shows the sound's frame
 };
 window.mienViewer = state; // for tests and the curious: read-only use
 
@@ -91,6 +96,7 @@ function httpCommand(command) {
   }
   if ("laugh" in command) return ["laughter", { type: command.laugh, intensity: command.intensity }];
   if ("idle" in command) return ["idle", command.idle];
+  if ("say" in command) return ["say", typeof command.say === "string" ? { text: command.say } : command.say];
   const aus = Object.fromEntries(Object.entries(command).filter(([key]) => /^AU\d/.test(key)));
   if (Object.keys(aus).length) return ["aus", { aus, speed: command.Speed ?? null }];
   return null;
@@ -122,6 +128,7 @@ function connect() {
   ws.onopen = () => {
     state.wsOpen = true;
     state.reconnectMs = 500;
+    state.speech.resetClock(); // a restarted server starts its clock again
     setConnection("live", true);
   };
   ws.onmessage = (event) => {
@@ -134,6 +141,9 @@ function connect() {
       setStatus(frame.error);
       return;
     }
+    state.speech.noteFrame(frame.timeS);
+    state.recent.push(frame);
+    if (state.recent.length > 120) state.recent.shift();
     state.frame = frame;
     state.frameDirty = true;
     state.ticksSeen += 1;
@@ -156,6 +166,14 @@ function onServerText(text) {
     setStatus(text.slice(0, 120));
     return;
   }
+  if (message.speech) {
+    if (String(message.speech.character) !== state.character) return;
+    state.speech
+      .play(message.speech)
+      .then((line) => line && setStatus(`${message.speech.character} ${line}`))
+      .catch((error) => setStatus(`speech sound: ${error.message || error}`));
+    return;
+  }
   if (message.error) setStatus(`server: ${message.error}`);
   else if (message.info || message.message) setStatus(String(message.info || message.message));
 }
@@ -167,6 +185,8 @@ function watch(characterId) {
   url.searchParams.set("character", characterId);
   history.replaceState(null, "", url);
   state.frame = null;
+  state.recent = [];
+  state.speech.stop();
   showIdle(state.characters.get(characterId));
   loadHead(characterId);
   if (state.wsOpen) {
@@ -421,17 +441,25 @@ function sameFace(a, b) {
 let fpsCount = 0;
 let fpsSince = performance.now();
 function animate(now) {
-  if (state.frameDirty && state.frame) {
-    if (!sameFace(state.frame, state.shown)) {
-      applyFrame(state.frame);
-      state.shown = state.head ? state.frame : null;
+  // while a sound plays, the face shows the frame of the sound's time (speech.js), else the newest frame
+  const soundS = state.speech.soundTimeS();
+  const frame = soundS === null ? state.frame : frameAt(state.recent, soundS) || state.frame;
+  if ((state.frameDirty || soundS !== null) && frame) {
+    if (!sameFace(frame, state.shown)) {
+      applyFrame(frame);
+      state.shown = state.head ? frame : null;
       state.needsRender = true;
     }
     state.frameDirty = false;
-    if (state.frame.tick !== state.lastTick) {
-      state.lastTick = state.frame.tick;
-      $("status-tick").textContent = `tick ${state.frame.tick}  t ${state.frame.timeS.toFixed(2)} s`;
+    if (frame.tick !== state.lastTick) {
+      state.lastTick = frame.tick;
+      $("status-tick").textContent = `tick ${frame.tick}  t ${frame.timeS.toFixed(2)} s`;
     }
+  }
+  if (soundS !== null && frame) {
+    const next = state.recent[state.recent.indexOf(frame) + 1];
+    state.speechLog.push({ frameS: frame.timeS, soundS, nextS: next ? next.timeS : null });
+    if (state.speechLog.length > 2000) state.speechLog.shift();
   }
   if (state.needsRender) {
     renderer.render(scene, camera);
@@ -758,6 +786,29 @@ function buildCharacters(heads) {
   });
 }
 
+function buildSpeech() {
+  const text = $("say-text");
+  const sound = $("say-sound");
+  const say = () => {
+    const words = text.value.trim();
+    if (!words) {
+      setStatus("type something to say");
+      return;
+    }
+    state.speech.unlock(); // a click: the browser lets the page play sound from now on
+    send({ say: words });
+  };
+  $("say-button").addEventListener("click", say);
+  text.addEventListener("keydown", (event) => event.key === "Enter" && say());
+  sound.addEventListener("change", () => {
+    state.speech.enabled = sound.checked;
+    if (sound.checked) state.speech.unlock();
+    else state.speech.stop();
+  });
+  // browsers start audio only after a user gesture: the first click anywhere allows it
+  document.addEventListener("pointerdown", () => state.speech.enabled && state.speech.unlock(), { once: true });
+}
+
 function buildClip(suffixes) {
   $("clip-file").accept = suffixes.join(",");
   $("clip-play").addEventListener("click", async () => {
@@ -779,6 +830,13 @@ function buildClip(suffixes) {
   });
 }
 
+async function fetchSound(url) {
+  const response = await fetch(withToken(url), { headers: authHeaders() });
+  if (!response.ok) throw new Error(`GET ${url}: ${response.status}`);
+  return response.arrayBuffer();
+}
+state.speech = new SpeechPlayer(fetchSound);
+
 async function main() {
   requestAnimationFrame(animate);
   try {
@@ -796,6 +854,7 @@ async function main() {
   buildActionUnits(controls);
   buildCharacters(controls.heads);
   buildClip(controls.clip_suffixes);
+  buildSpeech();
   await refreshCharacters(state.character);
   document.body.dataset.ready = "1";
 }
