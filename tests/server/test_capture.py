@@ -137,15 +137,17 @@ def _track_some(server: ServerThread, frames: int) -> dict[str, Any]:
 
 def test_a_video_without_a_face_leaves_the_face_neutral(shared_data: Path, landmarker_path: Path) -> None:
     with _server(shared_data / "video" / "no_face.mp4", landmarker_path) as server:
+        followed = httpx.post(f"{server.base_url}/api/characters/b/capture", json={"follow": True}, timeout=10)
+        assert followed.status_code == 202
         with UdpClient(port=server.udp_port) as udp:
             udp.send({"AU12": 4}, speed=1.0, character="b")
             status = _track_some(server, 15)
             registry = server.server.registry
             frames = server.call(lambda: registry.frames.copy())
-    assert status["state"] == "no_face" and not status["has_face"]
+    assert status["state"] == "no_face" and not status["has_face"] and status["followers"] == ["a", "b"]
     assert status["frames_without_face"] == status["frames_tracked"]
     assert np.abs(frames[0, _AUS]).max() == 0.0  # a: neutral, documented fallback
-    assert frames[1, FACE_CHANNELS.index("AU12L")] == 4.0  # b: on the clock, its own command
+    assert frames[1, FACE_CHANNELS.index("AU12L")] == 4.0  # b: its own command on top of a neutral performance
 
 
 def test_a_face_too_small_counts_as_no_face(shared_data: Path, landmarker_path: Path) -> None:
