@@ -330,7 +330,7 @@ class CaptureSource:
                         self.counts["frames_without_face"] += found is None
                         self.counts["frames_face_too_small"] += small
                     self._publish(frame, arrival_s, source_s, now, time.monotonic(), face)
-        except Exception as exc:  # a model MediaPipe refuses, a bug: the characters ease to neutral
+        except Exception as exc:  # a model MediaPipe refuses, a bug: the followers drop to neutral at once
             with self._lock:
                 self.state, self.error = "failed", f"tracking failed: {exc}"[:300]
                 self._frame = None
