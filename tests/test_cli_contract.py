@@ -109,6 +109,9 @@ CASES: list[Case] = [
         "character file",
     ),
     case("export", "own names in JSON", "export {d}/smile.csv -o {d}/o.json --names file --head builtin", "--names"),
+    case("export", "undecodable audio", "export {d}/smile.csv -o {d}/o.json --audio {d}/speech_noise.wav",
+         "speech_noise.wav", "decode"),
+    case("export", "missing audio", "export {d}/smile.csv -o {d}/o.json --audio {d}/nope.wav", "nope.wav"),
     # import
     case("import", "typo in a file name", "import {d}/smlie.csv -o {d}/o.npz", "did you mean", "smile.csv"),
     case("import", "empty file", "import {d}/empty.csv -o {d}/o.npz", "empty.csv is empty"),
@@ -246,6 +249,7 @@ CASES: list[Case] = [
     case("say", "language the TTS lacks", "say hello --language xx-nope -o {d}/s.mp4", "espeak-ng"),
     case("say", "rate out of range", "say hello --rate 5 -o {d}/s.mp4", "rate_wpm=5", "80..450"),
     case("say", "not an mp4", "say hello -o {d}/s.avi", "s.avi", ".mp4"),
+    case("say", "a sound as the clip", "say hello -o {d}/s.wav", "s.wav", "clip file"),
     case("say", "text and audio", "say hello --audio {d}/speech_noise.wav -o {d}/s.mp4", "--audio", "one of them"),
     case("say", "timing overlaps", "say --timing {d}/overlap.csv -o {d}/s.mp4", "segment 2", "no overlap"),
     case("say", "timing gap", "say --timing {d}/gap.json -o {d}/s.mp4", "segment 2", "no gap"),

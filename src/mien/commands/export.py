@@ -48,6 +48,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--fps", type=positive_fps, help="resample the clip to this frame rate before writing")
     parser.add_argument("--format", help="output format when several share a suffix (arkit_csv for .csv)")
     parser.add_argument("--input-format", help="input format when its suffix and header do not tell")
+    parser.add_argument(
+        "--audio",
+        type=input_file,
+        help="the clip's sound (WAV, MP3, OGG...): written beside OUTPUT as a WAV of the same stem (out.glb + "
+        "out.wav; no clip format carries sound), starting with the clip's first frame",
+    )
     parser.set_defaults(handler=run)
 
 
@@ -78,6 +84,13 @@ def run(args: argparse.Namespace) -> int:
             refuse_option("--names", args.names, "give the character file with --head face.glb")
     elif not carries_head and (args.head is not None or args.identity is not None):
         refuse_option("--head", head_spec, f"{args.output.suffix} carries no head (only .glb and .vrm do)")
+    audio = None
+    if args.audio is not None:  # read before anything is written: a sound that does not decode fails first
+        from mien.exchange.spoken import sound_path
+        from mien.speech.audio import read_audio
+
+        wav_path = sound_path(args.output)
+        audio = read_audio(args.audio)
     clip, messages = read_input_clip(args.input, args.input_format, "export")
     notes = []
     if output_format not in ANY_CHANNEL_FORMATS and not carries_head:
@@ -111,6 +124,12 @@ def run(args: argparse.Namespace) -> int:
         else:
             write(clip, args.output)
             done = f"({output_format})"
+    if audio is not None:
+        audio.write_wav(wav_path)
+        clip_end_s = (clip.n_frames - 1) / clip.fps
+        if audio.duration_s > clip_end_s + 1.0 / clip.fps:
+            messages.append(f"the sound lasts {audio.duration_s:.2f} s, the clip {clip_end_s:.2f} s: the face stops")
+        notes.append(f"sound beside it: {wav_path}")
     for message in [*messages, *(str(w.message) for w in caught)]:
         print(f"mien export: warning: {message}")
     for note in notes:

@@ -29,7 +29,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "corners. The MP4 carries the sound, in sync; the sound is also kept as a WAV next to it.",
     )
     parser.add_argument("text", nargs="?", help="what to say (spoken by espeak-ng)")
-    add_output(parser, type=output_file, required=True, help="the .mp4 to write (its .wav is kept next to it)")
+    add_output(parser, type=output_file, required=True, help="the .mp4 to write (its .wav is kept next to it), or "
+               "a clip file (.glb with the head, .anim, .csv, .json...) with its sound beside it as .wav")  # fmt: skip
     parser.add_argument("--language", default="en", help="espeak-ng voice for TEXT (default %(default)s)")
     parser.add_argument("--rate", type=int, default=175, help="speaking rate, words per minute (default %(default)s)")
     parser.add_argument("--timing", type=input_file, help="phoneme/viseme timing (.json, .csv) or OpenFaceFX track")
@@ -92,8 +93,11 @@ def run(args: argparse.Namespace) -> int:
     from mien.speech.audio import mux_audio
 
     out: Path = args.output
-    if out.suffix.lower() != ".mp4":
-        raise InvalidValueError("output", str(out), "an .mp4 file (the video with its sound)")
+    spoken_clip = out.suffix.lower() != ".mp4"  # a clip file (.glb, .anim, .csv...) with its sound beside it
+    if spoken_clip:
+        from mien.commands._spoken import check_clip_output, export_spoken
+
+        check_clip_output(out)
     if isinstance(args.text, str) and not args.text.strip():
         raise InvalidValueError("text", args.text, "some text to say (it is empty)")
     emotion = None
@@ -109,6 +113,8 @@ def run(args: argparse.Namespace) -> int:
         character.emote(emotion, args.intensity, start_s=0.0, envelope=Envelope(0.3, duration, 0.3))
     character.say(utterance, start_s=0.0)
     clip = character.run(duration, args.fps)
+    if spoken_clip:
+        return export_spoken(args, clip, utterance)
     rig, camera, size = scene_from_args(args)
     weights, poses = face_to_rig(rig, clip, character.last_feature_weights)
     out.parent.mkdir(parents=True, exist_ok=True)
