@@ -150,6 +150,8 @@ CASES: list[Case] = [
     case("track", "negative gap", "track {d}/clip.mp4 --max-gap-s -1", "--max-gap-s", "'-1'"),
     case("track", "output under a file", f"track {{d}}/clip.mp4 -o {UNDER_FILE}.npz", "some_file.txt is a file"),
     case("track", "wrong output format", "track {d}/clip.mp4 -o {d}/track.txt", "track.txt", ".npz or .json"),
+    case("track", "zero workers", "track {d}/clip.mp4 --workers 0", "--workers", "'0'", ">= 1"),
+    case("track", "workers not a number", "track {d}/clip.mp4 --workers two", "--workers", "'two'", "whole number"),
     # capture
     case("capture", "missing file", "capture {d}/nothing.mp4 -o {d}/c.npz", "no such file", "nothing.mp4"),
     case("capture", "typo in a file name", "capture {d}/clpi.mp4 -o {d}/c.npz", "did you mean", "clip.mp4"),
@@ -162,6 +164,8 @@ CASES: list[Case] = [
     case("capture", "negative neutral seconds", "capture {d}/clip.mp4 -o {d}/c.npz --neutral-first-s -1", "'-1'"),
     case("capture", "missing neutral image", "capture {d}/clip.mp4 -o {d}/c.npz --neutral-image {d}/n.png", "n.png"),
     case("capture", "zero cut-off", "capture {d}/clip.mp4 -o {d}/c.npz --cutoff-hz 0", "--cutoff-hz", "'0'"),
+    case("capture", "negative workers", "capture {d}/clip.mp4 -o {d}/c.npz --workers -2", "--workers", "'-2'"),
+    case("capture", "fractional workers", "capture {d}/clip.mp4 -o {d}/c.npz --workers 1.5", "--workers", "'1.5'"),
     case("capture", "unknown route", "capture {d}/clip.mp4 -o {d}/c.npz --route blend", "--route", "'blend'"),
     case("capture", "output format", "capture {d}/clip.mp4 -o {d}/c.anim", "c.anim", ".csv, .json or .npz"),
     case("capture", "output under a file", f"capture {{d}}/clip.mp4 -o {UNDER_FILE}.npz", "some_file.txt is a file"),

@@ -234,15 +234,17 @@ def capture_video(
     model: str | os.PathLike[str] | None = None,
     use_cache: bool = True,
     show_progress: bool = True,
+    workers: int | None = None,
 ) -> Capture:
     """Track ``video`` (MediaPipe, :func:`mien.tracking.track_video`, cached) and capture it.
 
-    neutral: a (55,) neutral (e.g. :func:`neutral_from_image`); default from the settings' interval. A video
+    neutral: a (55,) neutral (e.g. :func:`neutral_from_image`); default from the settings' interval. workers:
+    tracking processes (:func:`mien.tracking.track_video`; None: one per CPU for a long enough video). A video
     without any face gives a capture whose frames are all neutral and marked faceless.
     """
     from mien.tracking.track import track_video
 
-    track = track_video(video, model, use_cache=use_cache, show_progress=show_progress)
+    track = track_video(video, model, use_cache=use_cache, show_progress=show_progress, workers=workers)
     return capture_track(track, settings, neutral=neutral)
 
 
@@ -281,10 +283,12 @@ def capture_file(
     model: str | os.PathLike[str] | None = None,
     use_cache: bool = True,
     show_progress: bool = True,
+    workers: int | None = None,
 ) -> Capture:
     """Capture any recording mien reads: a video (tracked), a track file (``.npz``/``.json``), a Live Link Face
     CSV (its ARKit scores through the same stream) or an OpenFace CSV (AU intensities from OpenFace's own
-    detector, kept as read: no scores to filter; :attr:`Capture.weights` are zeros).
+    detector, kept as read: no scores to filter; :attr:`Capture.weights` are zeros). ``workers`` is for a video
+    (:func:`capture_video`).
 
     Raises :class:`InvalidValueError` naming the file when it is none of these or cannot be read.
     """
@@ -304,7 +308,9 @@ def capture_file(
         if name == "openface_csv":
             return _openface_capture(clip, str(file.resolve()), settings or CaptureSettings())
         raise InvalidValueError("input", str(file), f"{_INPUTS} (this CSV is a {name} clip)")
-    return capture_video(file, settings, neutral=neutral, model=model, use_cache=use_cache, show_progress=show_progress)
+    return capture_video(
+        file, settings, neutral=neutral, model=model, use_cache=use_cache, show_progress=show_progress, workers=workers
+    )
 
 
 def _openface_capture(clip: Clip, source: str, settings: CaptureSettings) -> Capture:

@@ -10,6 +10,7 @@
 * **Basis**: ``facs`` or ``feature_points``, spelled as in Python and TOML (:func:`basis_name`).
 * **Frame rate**: :data:`ANIMATION_FPS` for animation data, :data:`VIDEO_FPS` for video.
 * **Progress**: ``--quiet`` on every command that shows progress (:func:`add_quiet`).
+* **Processes**: ``--workers N`` where work is split over processes (:func:`add_workers`; ``track``, ``capture``).
 * **Access token**: ``--token``, ``--token-file FILE`` or ``$MIEN_TOKEN`` (:func:`add_token`).
 
 An old spelling keeps working until :data:`REMOVED_IN` (:func:`add_deprecated_alias`,
@@ -43,12 +44,14 @@ __all__ = [
     "add_output",
     "add_quiet",
     "add_token",
+    "add_workers",
     "basis_list",
     "basis_name",
     "deprecated",
     "finish",
     "head_list",
     "head_spec",
+    "worker_count",
 ]
 
 REMOVED_IN = "0.2"
@@ -317,6 +320,26 @@ def basis_list(text: str) -> str:
 def add_quiet(parser: argparse.ArgumentParser) -> None:
     """Add ``--quiet``: no progress bars (bars show only on a terminal anyway)."""
     parser.add_argument("--quiet", action="store_true", help="no progress bars")
+
+
+def worker_count(text: str) -> int:
+    """argparse type: a number of worker processes, a whole number >= 1.
+
+    >>> worker_count("2")
+    2
+    """
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number: give a number of processes >= 1") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} must be >= 1 (processes), e.g. 2; leave it out for one per CPU")
+    return value
+
+
+def add_workers(parser: argparse.ArgumentParser, *, help: str) -> None:
+    """Add ``--workers N``: processes sharing the work (default None: the command picks, one per CPU)."""
+    parser.add_argument("--workers", type=worker_count, default=None, metavar="N", help=help)
 
 
 # ------------------------------------------------------------------------------------------------ secrets

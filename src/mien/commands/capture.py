@@ -11,7 +11,8 @@ from __future__ import annotations
 import argparse
 
 from mien.commands._checks import input_file, non_negative_seconds, output_file
-from mien.commands._vocabulary import add_landmarker, add_output, add_quiet
+from mien.commands._vocabulary import add_landmarker, add_output, add_quiet, add_workers
+from mien.commands.track import TRACK_WORKERS_HELP
 
 __all__ = ["neutral_interval", "register", "run"]
 
@@ -82,6 +83,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     parser.add_argument("--no-mask", action="store_true", help="leave out the face_found mask channel")
     add_landmarker(parser, type=input_file)
     parser.add_argument("--no-cache", action="store_true", help="track the video again even when cached")
+    add_workers(parser, help=TRACK_WORKERS_HELP)
     add_quiet(parser)
     parser.set_defaults(handler=run)
 
@@ -142,6 +144,7 @@ def run(args: argparse.Namespace) -> int:
             model=args.landmarker,
             use_cache=not args.no_cache,
             show_progress=not args.quiet,
+            workers=args.workers,
         )
     for warning in caught:
         print(f"mien capture: warning: {warning.message}")

@@ -5,9 +5,13 @@ from __future__ import annotations
 import argparse
 
 from mien.commands._checks import input_file, non_negative_seconds, output_file
-from mien.commands._vocabulary import add_landmarker, add_output, add_quiet
+from mien.commands._vocabulary import add_landmarker, add_output, add_quiet, add_workers
 
-__all__ = ["register", "run"]
+__all__ = ["TRACK_WORKERS_HELP", "register", "run"]
+
+TRACK_WORKERS_HELP = (
+    "processes tracking segments of the video at once (default: one per CPU for a video of 10 s or more, else 1)"
+)
 
 
 def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -33,6 +37,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         default=0.2,
         help="longest gap (seconds) filled by interpolation (default 0.2)",
     )
+    add_workers(parser, help=TRACK_WORKERS_HELP)
     add_quiet(parser)
     parser.set_defaults(handler=run)
 
@@ -50,6 +55,7 @@ def run(args: argparse.Namespace) -> int:
         max_gap_s=args.max_gap_s,
         use_cache=not args.no_cache,
         show_progress=not args.quiet,
+        workers=args.workers,
     )
     print(track.report())
     if args.output:

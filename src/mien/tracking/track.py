@@ -34,7 +34,6 @@ from mien.fileio.container import load_container, save_container
 from mien.fileio.hashing import file_sha256, key_sha256
 from mien.fileio.streams import write_text
 from mien.paths import cache_dir, require_asset
-from mien.progress import progress
 from mien.tracking.landmarker import MIN_CONFIDENCE, N_LANDMARKS, head_pose_deg
 from mien.tracking.video import VideoHeader, probe
 
@@ -317,17 +316,25 @@ def track_video(
     min_confidence: float = MIN_CONFIDENCE,
     use_cache: bool = True,
     show_progress: bool = True,
+    workers: int | None = None,
 ) -> Track:
     """Track the face through ``video``: landmarks, blendshapes and head pose on every frame.
 
     model: ``face_landmarker.task`` (default: the configured asset). max_gap_s: longest gap filled by
     interpolation (seconds). min_confidence: MediaPipe's detection / presence / tracking thresholds.
     use_cache: reuse / store the per-frame result (gap filling is re-applied, so changing ``max_gap_s`` needs
-    no re-tracking). show_progress: a progress bar on stderr. A video without any face gives a Track with no takes.
+    no re-tracking). show_progress: a progress bar on stderr. workers: processes tracking contiguous segments of
+    the video at once (:mod:`mien.tracking.parallel`; None: one per CPU for a video long enough to gain, else 1;
+    1: the whole video in this process). The results of any worker count agree within tracker noise, so the cache
+    entry does not depend on it (an entry written by a run with more workers serves a run with fewer and the other
+    way round). A video without any face gives a Track with no takes.
     Raises :class:`InvalidValueError` naming the file when it is missing, truncated or not a video.
     """
+    from mien.tracking.parallel import check_workers
+
     if not np.isfinite(max_gap_s) or max_gap_s < 0:
         raise InvalidValueError("max_gap_s", max_gap_s, "a finite number of seconds >= 0")
+    check_workers(workers)
     path = Path(video).expanduser().resolve()
     info = probe(path)
     model_path = require_asset("face_landmarker", model)
@@ -337,46 +344,29 @@ def track_video(
             return apply_gaps(load_track(cached), max_gap_s)
         except InvalidValueError:
             cached.unlink(missing_ok=True)  # a damaged cache entry: track again
-    raw = _track_frames(path, model_path, min_confidence, info, show_progress)
+    raw = _track_frames(path, model_path, min_confidence, info, workers, show_progress)
     if cached is not None:
         raw.save(cached)  # atomic: a temporary file, then a rename
     return apply_gaps(raw, max_gap_s)
 
 
-def _track_frames(path: Path, model: Path, min_confidence: float, info: VideoHeader, show_progress: bool) -> Track:
-    from mien.tracking.landmarker import Landmarker
-    from mien.tracking.video import iter_frames, prefetch
+def _track_frames(
+    path: Path, model: Path, min_confidence: float, info: VideoHeader, workers: int | None, show_progress: bool
+) -> Track:
+    from mien.tracking.parallel import track_frames
 
-    times: list[float] = []
-    landmarks: list[np.ndarray] = []
-    blendshapes: list[np.ndarray] = []
-    matrices: list[np.ndarray] = []
-    found: list[bool] = []
-    missing_landmarks = np.full((N_LANDMARKS, 3), np.nan, np.float32)
-    missing_scores = np.full(len(ARKIT_NAMES), np.nan, np.float32)
-    missing_matrix = np.full((4, 4), np.nan)
-    frames = prefetch(iter_frames(path))
-    with Landmarker(model, mode="video", min_confidence=min_confidence) as landmarker:
-        bar = progress(frames, total=info.n_frames or None, desc=f"tracking {path.name}", enabled=show_progress)
-        for time_s, rgb in bar:
-            result = landmarker.detect(rgb, time_s)
-            times.append(time_s)
-            found.append(result is not None)
-            landmarks.append(missing_landmarks if result is None else result.landmarks)
-            blendshapes.append(missing_scores if result is None else result.blendshapes)
-            matrices.append(missing_matrix if result is None else result.matrix)
-    face_found = np.array(found, dtype=bool)
-    n = len(times)
+    frames = track_frames(path, model, min_confidence, info.n_frames, workers, show_progress)
+    n = frames.times_s.shape[0]
     return Track(
         source=str(path),
         fps=info.fps,
         width=info.width,
         height=info.height,
-        timestamps_s=np.array(times, dtype=np.float64),
-        landmarks=np.stack(landmarks) if n else np.zeros((0, N_LANDMARKS, 3), np.float32),
-        blendshapes=np.stack(blendshapes) if n else np.zeros((0, len(ARKIT_NAMES)), np.float32),
-        head_pose_deg=head_pose_deg(np.stack(matrices)) if n else np.zeros((0, 3)),
-        face_found=face_found,
+        timestamps_s=frames.times_s,
+        landmarks=frames.landmarks,
+        blendshapes=frames.blendshapes,
+        head_pose_deg=head_pose_deg(frames.matrices) if n else np.zeros((0, 3)),
+        face_found=frames.found,
         interpolated=np.zeros(n, dtype=bool),
         takes=(),
         max_gap_s=0.0,

@@ -12,7 +12,7 @@ import os
 import queue
 import threading
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from fractions import Fraction
 from pathlib import Path
 from typing import Any, TypeVar
@@ -22,7 +22,7 @@ import numpy as np
 from mien.errors import InvalidValueError, MissingExtraError
 from mien.extras import available
 
-__all__ = ["VideoHeader", "iter_frames", "prefetch", "probe"]
+__all__ = ["Segment", "VideoHeader", "iter_frames", "iter_segment", "plan_segments", "prefetch", "probe"]
 
 T = TypeVar("T")
 
@@ -157,6 +157,143 @@ def _iter_av(file: Path) -> Iterator[tuple[float, np.ndarray]]:
             raise _unreadable(file, f"truncated: only {packets} of the {declared} declared frames are present")
     finally:
         container.close()
+
+
+@dataclass(frozen=True)
+class Segment:
+    """A contiguous run of a video's frames, in presentation order, that can be decoded on its own
+    (:func:`plan_segments`, :func:`iter_segment`). Frame positions are presentation time stamps (pts) in the
+    stream's time base; ``None`` means the video's start (or, for ``stop_pts``, its end)."""
+
+    index: int
+    """The segment's place in the video (0 first)."""
+    first_frame: int
+    """Index of the segment's first frame among the video's frames (for messages and progress)."""
+    n_frames: int
+    """Frames in the segment (from the container's packets: an estimate when an edit list drops frames)."""
+    seek_pts: int | None
+    """The keyframe decoding starts from (None: the file's start, no seek)."""
+    warm_pts: int | None
+    """First frame decoded and handed out as a warm-up frame (before ``start_pts``; None: no warm-up)."""
+    start_pts: int | None
+    """The segment's first frame (None: the video's first)."""
+    stop_pts: int | None
+    """The next segment's first frame, not part of this one (None: to the end of the video)."""
+
+
+def plan_segments(
+    path: str | os.PathLike[str], n_segments: int, warmup_frames: int = 0
+) -> tuple[float, tuple[Segment, ...]] | None:
+    """Split a video into ``n_segments`` contiguous runs of frames that separate decoders can read in parallel.
+
+    Reads the container's packets (decodes one frame: the first, whose time is the origin of every time stamp)
+    and returns ``(origin_s, segments)``: the first frame's time in seconds (what :func:`iter_frames` subtracts)
+    and the segments, cut evenly by frame count. Each later segment decodes from the last keyframe at or before
+    its first warm-up frame (``warmup_frames`` frames before its first frame). Returns None where a video
+    cannot be split safely, so the caller reads it whole with :func:`iter_frames` (which then raises the usual
+    error for a damaged file): PyAV missing, fewer than ``2 * n_segments`` frames, packets without time stamps,
+    a demuxing error or a truncated file (fewer packets than the container declares).
+    """
+    if n_segments < 2 or not _has_av():
+        return None
+    import av
+
+    file = _check_file(path)
+    try:
+        container, stream = _open_av(file)
+    except InvalidValueError:
+        return None
+    try:
+        declared = int(stream.frames or 0)
+        stamps: list[int] = []
+        keys: list[int] = []
+        for packet in container.demux(stream):
+            if packet.size <= 0:
+                continue
+            if packet.pts is None:
+                return None
+            stamps.append(int(packet.pts))
+            if packet.is_keyframe:
+                keys.append(int(packet.pts))
+        if declared and len(stamps) < declared - 1:
+            return None
+        container.seek(0)
+        first = next(container.decode(stream), None)
+        if first is None or first.pts is None or first.time is None:
+            return None
+        origin_pts, origin_s = int(first.pts), float(first.time)
+    except (av.FFmpegError, StopIteration, ValueError):
+        return None
+    finally:
+        container.close()
+    frames = sorted(p for p in stamps if p >= origin_pts)  # frames an edit list drops come before the first
+    if len(frames) < 2 * n_segments or not keys:
+        return None
+    keys.sort()
+    cuts = [round(i * len(frames) / n_segments) for i in range(n_segments + 1)]
+    segments = []
+    for i in range(n_segments):
+        start, stop = cuts[i], cuts[i + 1]
+        stop_pts = frames[stop] if stop < len(frames) else None
+        if i == 0:
+            segments.append(Segment(0, 0, stop - start, None, None, None, stop_pts))
+            continue
+        warm_pts = frames[max(start - warmup_frames, 0)]
+        before = [k for k in keys if k <= warm_pts]
+        seek_pts = before[-1] if before else None
+        segments.append(Segment(i, start, stop - start, seek_pts, warm_pts, frames[start], stop_pts))
+    return origin_s, tuple(segments)
+
+
+def iter_segment(
+    path: str | os.PathLike[str], segment: Segment, origin_s: float
+) -> Iterator[tuple[float, np.ndarray, bool]]:
+    """Yield ``(timestamp_s, rgb, warm_up)`` for the frames of one :class:`Segment` of ``path`` (PyAV only).
+
+    ``timestamp_s`` is computed as :func:`iter_frames` computes it (the frame's time minus ``origin_s``, from
+    :func:`plan_segments`), so a video read in segments gives the same time stamps, bit for bit. Frames from
+    ``segment.warm_pts`` up to its first frame come first, flagged ``warm_up`` True. Raises
+    :class:`InvalidValueError` (field ``video``) when decoding fails, naming the frame index in the video.
+    """
+    import av
+
+    file = _check_file(path)
+    container, stream = _open_av(file)
+    rate = float(stream.average_rate or stream.guessed_rate or 30)
+    index = segment.first_frame
+    previous: float | None = None
+    try:
+        try:
+            if segment.seek_pts is not None:
+                container.seek(segment.seek_pts, stream=stream, backward=True, any_frame=False)
+            first = True
+            for packet in container.demux(stream):
+                for frame in packet.decode():
+                    pts = frame.pts
+                    if pts is not None and segment.warm_pts is not None and pts < segment.warm_pts:
+                        continue  # between the keyframe and the warm-up: decoded only
+                    if first and segment.seek_pts is not None and pts != segment.warm_pts:
+                        break  # the seek landed past the warm-up's first frame: decode from the start instead
+                    first = False
+                    if pts is not None and segment.stop_pts is not None and pts >= segment.stop_pts:
+                        return
+                    time_s = frame.time
+                    if time_s is None:  # as iter_frames: one nominal frame after the last
+                        time_s = origin_s if previous is None else previous + 1.0 / rate
+                    previous = time_s
+                    warm = pts is not None and segment.start_pts is not None and pts < segment.start_pts
+                    yield time_s - origin_s, frame.to_ndarray(format="rgb24"), warm
+                    index += not warm
+                else:
+                    continue
+                break
+            else:
+                return
+        except av.FFmpegError as exc:
+            raise _unreadable(file, f"decoding failed after {index} frames: {exc}") from None
+    finally:
+        container.close()
+    yield from iter_segment(file, replace(segment, seek_pts=None), origin_s)  # only after a seek went too far
 
 
 def _open_cv(file: Path) -> Any:
