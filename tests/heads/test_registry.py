@@ -155,3 +155,8 @@ def test_blender_icts_eye_shells_and_mouth_are_found_where_icts_own_regions_are(
     assert share_in("teeth", ("teeth",)) > 0.99 and len(rig.regions["teeth"]) > 0.8 * len(native.regions["teeth"])
     assert share_in("gums_tongue", ("gums_tongue",)) > 0.99
     assert share_in("mouth_socket", ("mouth_socket", "lips")) > 0.95
+    # the lips and the eye sockets seen through the lid openings (drawn dark, as ICT's own loader draws them)
+    assert share_in("lips", ("lips",)) > 0.9 and len(rig.regions["lips"]) > 0.3 * len(native.regions["lips"])
+    for side in ("L", "R"):  # the socket, and the lids' inner surfaces beside it (measured: 49 and 73 % socket)
+        assert share_in(f"eye_socket_{side}", (f"eye_socket_{side}", "face")) > 0.95, side
+        assert share_in(f"eye_socket_{side}", (f"eye_socket_{side}",)) > 0.4, side

@@ -45,7 +45,7 @@ from mien.paths import cache_dir, require_asset
 from mien.progress import progress
 from mien.rig.model import MorphTarget, Rig
 from mien.rig.obj import read_obj, read_obj_vertices
-from mien.rig.polygon import inside_polygon
+from mien.rig.polygon import lip_vertices
 
 __all__ = [
     "ICT_EXTRA_TARGETS",
@@ -290,11 +290,7 @@ def _regions(neutral: np.ndarray, landmarks: np.ndarray) -> dict[str, np.ndarray
     regions["head"] = np.arange(n, dtype=np.int32)
     regions["skin"] = np.arange(0, ICT_PARTS["head_neck"][1] + 1, dtype=np.int32)
     # Lips: face vertices inside the outer lip contour (iBUG 48..59) seen from the front, on the lips' surface.
-    face = regions["face"]
-    lip_points = neutral[landmarks[48:60]]
-    inside = inside_polygon(neutral[face, :2], lip_points[:, :2])
-    in_front = neutral[face, 2] > lip_points[:, 2].min() - 0.005
-    regions["lips"] = face[inside & in_front].astype(np.int32)
+    regions["lips"] = lip_vertices(neutral, regions["face"], neutral[landmarks[48:60]]).astype(np.int32)
     return regions
 
 
