@@ -97,8 +97,10 @@ class SpeechBatch:
         self._pool, self._pool_visemes = _silent_pools(1024)
         self._used = 1
         self._quiet = np.ones(n)
+        self._live_from = np.full(n, -math.inf)
+        self._live_to = np.full(n, math.inf)
         self._visemes = np.zeros((n, _N_VISEMES))
-        self._last_step: tuple[np.ndarray, np.ndarray, np.ndarray | None] | None = None
+        self._last_step: tuple[np.ndarray, np.ndarray] | None = None
         self._visemes_read = False
         self._every_row = False
         self._rows = np.zeros(0, np.intp)
@@ -119,11 +121,9 @@ class SpeechBatch:
         with their own viseme shapes (:func:`~mien.speech.visemes.rig_viseme_targets`). Built when read."""
         self._visemes_read = True
         if self._last_step is not None:
-            rows, index, live = self._last_step
+            rows, index = self._last_step
             self._last_step = None
-            weights = self._pool_visemes[index]
-            if live is not None:
-                weights *= live[:, None]
+            weights = self._pool_visemes[index]  # the first and last frames of an utterance are silence
             self._visemes[:] = 0.0
             self._visemes[rows] = weights
         return self._visemes
@@ -144,20 +144,24 @@ class SpeechBatch:
         self._offset = np.concatenate([self._offset, np.zeros(k, np.int64)])
         self._last = np.concatenate([self._last, np.zeros(k, np.int64)])
         self._quiet = np.concatenate([self._quiet, np.ones(k)])
+        self._live_from = np.concatenate([self._live_from, np.full(k, -math.inf)])
+        self._live_to = np.concatenate([self._live_to, np.full(k, math.inf)])
         self._visemes = np.concatenate([self._visemes, np.zeros((k, _N_VISEMES))])
         self._refresh()
 
     def reset_rows(self, rows: np.ndarray) -> None:
         """Silence ``rows`` (their utterances are dropped)."""
         self._settle()
-        self._visemes[rows] = 0.0
-        for row in np.asarray(rows).tolist():
+        changed = np.asarray(rows).ravel().tolist()
+        for row in changed:
             self._utterances.pop(row, None)
             self._spans.pop(row, None)
             self.fps[row] = self._start[row] = 0.0
             self._offset[row] = self._last[row] = 0  # a silent row reads pool row 0
-        self._quiet[rows] = 1.0
-        self._refresh(np.asarray(rows).ravel())
+            self._live_from[row], self._live_to[row] = -math.inf, math.inf
+            self._visemes[row] = 0.0
+            self._quiet[row] = 1.0
+        self._refresh(changed)
 
     def utterance(self, row: int) -> Utterance | None:
         """The utterance ``row`` is saying (or will say), if any."""
@@ -177,14 +181,16 @@ class SpeechBatch:
         stored = self._stored.get(utterance)
         offset = stored[0] if stored is not None and stored in self._spans.values() else self._store(frames)
         self._stored[utterance] = (offset, frames.shape[0])
-        for row in np.asarray(rows).tolist():
+        changed = np.asarray(rows).ravel().tolist()
+        for row in changed:
             self._utterances[row] = utterance
             self._spans[row] = (offset, frames.shape[0])
             self._start[row] = start
             self._offset[row] = offset
             self._last[row] = frames.shape[0] - 1
             self.fps[row] = ENGINE_FPS
-        self._refresh(np.asarray(rows).ravel())
+            self._live_from[row], self._live_to[row] = start, start + (frames.shape[0] - 1) / ENGINE_FPS
+        self._refresh(changed)
 
     def _store(self, frames: np.ndarray) -> int:
         """Copy ``frames`` into the pools and return their first row (compacting or growing the pools)."""
@@ -211,16 +217,16 @@ class SpeechBatch:
         self._used += need
         return offset
 
-    def _refresh(self, changed: np.ndarray | None = None) -> None:
+    def _refresh(self, changed: list[int] | None = None) -> None:
         """Cache the taking-part rows' arrays (in row order) for :meth:`apply`; only the ``changed`` rows when
         every row already takes part and still does (one say or one finished utterance costs O(1))."""
         n = self._quiet.shape[0]
         every_row = 0 < 2 * len(self._spans) and 2 * len(self._spans) >= n
         if changed is not None and every_row and self._every_row and self._rows.size == n:
-            self._rows_fps[changed] = self.fps[changed]
-            self._rows_base[changed] = self._offset[changed]
-            self._rows_last[changed] = self._last[changed]
-            self._rows_shift[changed] = self._start[changed] * self.fps[changed] - self._offset[changed] - 0.5
+            for row in changed:  # row i is row i: a few scalar writes
+                fps, offset = float(self.fps[row]), int(self._offset[row])
+                self._rows_fps[row], self._rows_base[row], self._rows_last[row] = fps, offset, self._last[row]
+                self._rows_shift[row] = float(self._start[row]) * fps - offset - 0.5
         else:
             self._every_row = every_row
             # with half the rows or more speaking, every row takes part (a silent one reads pool row 0):
@@ -233,12 +239,8 @@ class SpeechBatch:
             self._rows_last = self._last[rows]
             # nearest pool row at t: floor(t * fps - (start * fps - offset - 0.5)), one multiply and one subtract
             self._rows_shift = self._start[rows] * self._rows_fps - self._rows_base - 0.5
-        speaking = self.fps > 0
-        if speaking.any():
-            ends = self._start[speaking] + self._last[speaking] / self.fps[speaking]
-            self._all_live = (float(self._start[speaking].max()), float(ends.min()))
-        else:
-            self._all_live = (0.0, -1.0)
+        # every speaking row has started and none has ended between these times (silent rows: -inf, +inf)
+        self._all_live = (float(self._live_from.max()), float(self._live_to.min())) if self._spans else (0.0, -1.0)
 
     def _position(self, row: int) -> int | None:
         """Index of a speaking ``row`` among the rows taking part in a step (None if it is silent)."""
@@ -263,25 +265,26 @@ class SpeechBatch:
         if not self._spans:
             return None
         position = t_s * self._rows_fps - self._rows_shift  # pool row + 0.5: floor is the nearest row
-        live = None
-        if not self._all_live[0] <= t_s <= self._all_live[1]:  # some row not started or finished: clip, mask
-            first, last = self._rows_base, self._rows_base + self._rows_last
-            live = (position >= first) & (position < last + 1)
-            position = np.minimum(np.maximum(position, first), last)
+        if not self._all_live[0] <= t_s <= self._all_live[1]:
+            # some row has not started or has ended: it reads its first or last frame, which are silence (the
+            # edge fade ends at 0), so clamping is all it takes
+            first = self._rows_base
+            np.minimum(np.maximum(position, first, out=position), first + self._rows_last, out=position)
         index = position.astype(np.int64)  # floor: position >= 0
         values = self._pool[index]
-        if live is not None:
-            values[~live] = _SILENT
         if laughs:
-            covered = [(i, row) for row in laughs if (i := self._position(row)) is not None]
-            if covered:
-                # every step column is affine in the presence, equal to _SILENT at 0: scaling the presence by
-                # hold is _SILENT + hold * (values - _SILENT), for the speech values, the keep and the quiet alike
-                ids = [i for i, _ in covered]
-                hold = [
-                    1.0 - max(_cover(t_s, laugh.start_s, laugh.end_s) for laugh in laughs[row]) for _, row in covered
-                ]
-                values[ids] = _SILENT + np.array(hold)[:, None] * (values[ids] - _SILENT)
+            for row, active in laughs.items():
+                i = self._position(row)
+                if i is None:
+                    continue
+                hold = 1.0 - max(_cover(t_s, laugh.start_s, laugh.end_s) for laugh in active)
+                if hold < 1.0:
+                    # every step column is affine in the presence and equals _SILENT at 0: scaling the presence
+                    # by hold is _SILENT + hold * (values - _SILENT), for the speech, the keep and the quiet alike
+                    held = values[i]
+                    held -= _SILENT
+                    held *= hold
+                    held += _SILENT
         if self._every_row and frames.shape[0] == rows.size:
             block = frames[:, SPAN]  # a view: the rule applied in place
             block *= values[:, _W : 2 * _W]
@@ -295,11 +298,11 @@ class SpeechBatch:
             frames[rows, SPAN] = block
             quiet = self._quiet
             quiet[rows] = values[:, _QUIET]
-        self._last_step = (rows, index, live)
-        if live is not None and not live.all():
-            finished = (position >= self._rows_base + self._rows_last) & ~live & (self._rows_fps > 0)  # past the end
-            if finished.any():
-                self.reset_rows(rows[finished])
+        self._last_step = (rows, index)
+        if t_s > self._all_live[1]:  # some utterance has ended: drop it
+            finished = np.flatnonzero(self._live_to < t_s)
+            if finished.size:
+                self.reset_rows(finished)
         return self._quiet
 
 
