@@ -20,6 +20,8 @@ and the key, so ``mien study ...`` answers exit 2 with a message instead of a tr
     duration_s = 3.0
     fps = 30
     size = 256
+    say = ""                     # a sentence every stimulus speaks (espeak-ng), its expression the condition;
+                                 # or {text = "...", language = "en", rate_wpm = 175} (optional)
     [design]
     within = ["basis", "view", "distance_m", "intensity"]
     order = "counterbalanced"
@@ -54,6 +56,7 @@ __all__ = [
     "PROTOCOLS",
     "VIEWS",
     "Design",
+    "SpokenLine",
     "StimulusSpec",
     "check_redirect_url",
     "check_study_name",
@@ -81,7 +84,7 @@ ORDERS: tuple[str, ...] = ("counterbalanced", "random", "fixed")
 """Orders of the within-subject blocks: balanced Latin square over participants, random per participant, or
 the design order."""
 
-BROEKENS_ONLY_KEYS: tuple[str, ...] = ("expressions", "heads", "bases", "views", "distances_m", "intensities")
+BROEKENS_ONLY_KEYS: tuple[str, ...] = ("expressions", "heads", "bases", "views", "distances_m", "intensities", "say")
 """``[stimuli]`` keys of Broekens designs only."""
 
 BASES: tuple[str, ...] = ("facs", "feature_points")
@@ -110,11 +113,28 @@ _KEYS: dict[str, tuple[str, ...]] = {
         "fps",
         "size",
         "seed",
+        "say",
         "file",
     ),
     "design": ("within", "order"),
     "file": ("path", "expression", "conditions"),
+    "say": ("text", "language", "rate_wpm"),
 }
+
+MAX_SPOKEN_CHARS = 1000
+"""Longest sentence a stimulus speaks, characters (about a minute of speech)."""
+
+
+@dataclass(frozen=True)
+class SpokenLine:
+    """What every rendered stimulus says (``[stimuli] say``), spoken by espeak-ng from the expression's onset."""
+
+    text: str
+    """The sentence."""
+    language: str = "en"
+    """espeak-ng voice (``en``, ``de``, ``fr``...)."""
+    rate_wpm: int = 175
+    """Speaking rate, words per minute (80..450)."""
 
 
 @dataclass(frozen=True)
@@ -170,6 +190,8 @@ class Design:
     """Rendered frame width and height, pixels (even)."""
     seed: int = 0
     """Seed of the idle behaviour (blinks, head motion) of rendered clips."""
+    say: SpokenLine | None = None
+    """A sentence every rendered stimulus speaks while it shows its expression (None: silent stimuli)."""
 
     @property
     def factors(self) -> tuple[str, ...]:
@@ -292,6 +314,23 @@ def _laughter_type(path: Path, key: str, name: str) -> str:
     return name
 
 
+def _say(path: Path, value: Any) -> SpokenLine | None:
+    """``[stimuli] say``: a sentence, or a table ``{text, language, rate_wpm}`` (None when absent)."""
+    if value is None:
+        return None
+    table = {"text": value} if isinstance(value, str) else _check_keys(path, value, "say", "stimuli.say")
+    text = table.get("text")
+    if not isinstance(text, str) or not text.strip() or len(text) > MAX_SPOKEN_CHARS:
+        raise _fail(path, "stimuli.say.text", text, f"a sentence to speak (1..{MAX_SPOKEN_CHARS} characters)")
+    language = table.get("language", "en")
+    if not isinstance(language, str) or not re.fullmatch(r"[A-Za-z]{2,3}(-[A-Za-z0-9]{1,8}){0,3}", language):
+        raise _fail(path, "stimuli.say.language", language, "an espeak-ng voice such as en, en-us, de, fr")
+    rate = table.get("rate_wpm", 175)
+    if isinstance(rate, bool) or not isinstance(rate, int) or not 80 <= rate <= 450:
+        raise _fail(path, "stimuli.say.rate_wpm", rate, "words per minute, an integer 80..450")
+    return SpokenLine(text.strip(), language, rate)
+
+
 def _head(path: Path, spec: str) -> tuple[str, str]:
     """``"ict:a"`` -> ("ict", "a"); ``"default"`` -> ("default", ""). Checks the head name only (identities
     are checked when a head is loaded, which needs its assets)."""
@@ -410,6 +449,8 @@ def parse_design(data: dict[str, Any], path: Path, sha256: str = "") -> Design:
     source = s.get("source", "render")
     if source not in ("render", "files"):
         raise UnknownNameError(f"stimulus source in {path} stimuli.source", source, ("render", "files"))
+    if source == "files" and "say" in s:
+        raise _fail(path, "stimuli.say", s["say"], 'no say with source = "files" (supplied videos bring their sound)')
     files: list[str | None]
     if source == "files":
         supplied = _supplied(path, s, protocol)
@@ -458,6 +499,7 @@ def parse_design(data: dict[str, Any], path: Path, sha256: str = "") -> Design:
         fps=_number(path, "stimuli.fps", s.get("fps"), 30.0, 1.0, 240.0),
         size=int(size),
         seed=seed,
+        say=_say(path, s.get("say")),
     )
 
 

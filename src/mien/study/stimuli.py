@@ -4,7 +4,9 @@ Rendered Broekens stimuli: a :class:`~mien.character.Character` (idle blinks and
 the expression at the design's intensity with the study envelope (onset 0.4 s, hold 0.3 s, decay 0.3 s),
 on the head and identity, in the basis, seen through the ``frontal``/``lateral`` camera preset of
 :mod:`mien.render.camera` at the distance. Mascaró stimuli: the character plays the laughter type
-(:mod:`mien.laughter`). Frames come from mien's renderer (:func:`mien.render.clip_render.iter_frames`) into
+(:mod:`mien.laughter`). A design with ``[stimuli] say`` makes every rendered stimulus speak the sentence
+while it shows its expression (:mod:`mien.study.spoken`): the MP4 carries the sound and the manifest the text
+and its timing source (``speech``). Frames come from mien's renderer (:func:`mien.render.clip_render.iter_frames`) into
 H.264 MP4 (:class:`mien.render.video.Mp4Writer`); one renderer serves every stimulus with the same head,
 basis and camera.
 
@@ -139,6 +141,8 @@ def _spec_key(design: Design, spec: StimulusSpec, head: dict[str, str] | None = 
             duration_s=design.duration_s, onset_s=design.onset_s, fps=design.fps, size=design.size, seed=design.seed
         )
         key["rendered_head"] = head
+        if design.say is not None:
+            key["say"] = [design.say.text, design.say.language, design.say.rate_wpm]
     else:
         key["source_sha256"] = file_sha256(spec.file)
     return json.dumps(key, sort_keys=True)
@@ -157,6 +161,13 @@ def _finished(out: Path, spec: StimulusSpec, key: str) -> dict[str, Any] | None:
     if record.get("key") != key or not video.is_file() or file_sha256(video) != record.get("sha256"):
         return None
     return dict(record)
+
+
+def _speech(design: Design, utterance: Any) -> dict[str, Any]:
+    from mien.study.spoken import speech_record
+
+    assert design.say is not None
+    return speech_record(design.say, utterance, design.onset_s)
 
 
 def _write_json_atomic(path: Path, data: Any) -> None:
@@ -195,8 +206,8 @@ class _Scenes:
             self._renderer, self._key = None, None
 
 
-def _face_clip(design: Design, spec: StimulusSpec) -> tuple[Any, np.ndarray | None]:
-    """(face Clip, feature weights or None) of a rendered stimulus."""
+def _face_clip(design: Design, spec: StimulusSpec, utterance: Any = None) -> tuple[Any, np.ndarray | None]:
+    """(face Clip, feature weights or None) of a rendered stimulus (saying ``utterance`` from the onset)."""
 
     if design.protocol == "mascaro":
         character = Character(seed=design.seed)
@@ -205,13 +216,24 @@ def _face_clip(design: Design, spec: StimulusSpec) -> tuple[Any, np.ndarray | No
         return character.run(duration, design.fps), None
     basis = str(spec.conditions["basis"])
     character = Character(seed=design.seed, expression_basis=basis)
+    if utterance is not None:
+        from mien.study.spoken import clip_duration_s, speaking_envelope
+
+        intensity = float(spec.conditions["intensity"])
+        envelope = speaking_envelope(utterance)
+        character.emote(spec.expression, intensity, start_s=design.onset_s, envelope=envelope)
+        character.say(utterance, start_s=design.onset_s)
+        return character.run(clip_duration_s(design, utterance), design.fps), character.last_feature_weights
     character.emote(spec.expression, float(spec.conditions["intensity"]), start_s=design.onset_s)
     clip = character.run(design.duration_s, design.fps)
     return clip, character.last_feature_weights
 
 
-def _render(design: Design, spec: StimulusSpec, scenes: _Scenes, video: Path, head: str = "") -> tuple[float, float]:
-    """Render ``spec`` into ``video``; ``head``: the resolved head (:func:`rendered_head`), default the design's."""
+def _render(
+    design: Design, spec: StimulusSpec, scenes: _Scenes, video: Path, head: str = "", utterance: Any = None
+) -> tuple[float, float]:
+    """Render ``spec`` into ``video``; ``head``: the resolved head (:func:`rendered_head`), default the design's;
+    ``utterance``: what it says (the video then carries the sound)."""
 
     conditions = spec.conditions
     design_head, identity = _design_head(design, spec)
@@ -223,12 +245,21 @@ def _render(design: Design, spec: StimulusSpec, scenes: _Scenes, video: Path, he
         basis, view, distance = "facs", "frontal", 1.0
     rig_key = (head, identity, basis)
     rig = scenes.rig(*rig_key)
-    clip, features = _face_clip(design, spec)
+    clip, features = _face_clip(design, spec, utterance)
     weights, poses = face_to_rig(rig, clip, features)
     renderer = scenes.renderer(rig_key, view, distance)
-    with Mp4Writer(video, clip.fps) as writer:
+    silent = video.with_name(f".{video.stem}.silent.mp4") if utterance is not None else video
+    with Mp4Writer(silent, clip.fps) as writer:
         for image in iter_frames(rig, weights, renderer, poses):
             writer.write(image)
+    if utterance is not None:
+        from mien.speech.audio import mux_audio
+        from mien.study.spoken import sound_from_start
+
+        try:
+            mux_audio(silent, sound_from_start(utterance, design.onset_s), video)
+        finally:
+            silent.unlink(missing_ok=True)
     return clip.n_frames / clip.fps, float(clip.fps)
 
 
@@ -251,6 +282,11 @@ def make_stimuli(
     for spec in design.stimuli:
         if spec.file is not None:
             supplied[spec.id] = check_video(spec.file)
+    utterance = None
+    if design.say is not None and any(spec.file is None for spec in design.stimuli):
+        from mien.study.spoken import speak_line
+
+        utterance = speak_line(design.say)  # once, before any video: a voice espeak-ng lacks fails first
     folder.mkdir(parents=True, exist_ok=True)
     scenes = _Scenes(design.size)
     heads: dict[tuple[str, str], dict[str, str]] = {}  # (head, identity) of the design -> rendered_head
@@ -275,7 +311,7 @@ def make_stimuli(
                     duration_s, fps = supplied[spec.id]
                 else:
                     assert head is not None
-                    duration_s, fps = _render(design, spec, scenes, video, head["head"])
+                    duration_s, fps = _render(design, spec, scenes, video, head["head"], utterance)
                 record = {
                     "key": key,
                     "file": video.name,
@@ -299,6 +335,7 @@ def make_stimuli(
                     "duration_s": record["duration_s"],
                     "fps": record["fps"],
                     **({"rendered_head": head} if head is not None else {}),
+                    **({"speech": _speech(design, utterance)} if spec.file is None and utterance is not None else {}),
                 }
             )
     finally:
