@@ -20,8 +20,8 @@ and the key, so ``mien study ...`` answers exit 2 with a message instead of a tr
     duration_s = 3.0
     fps = 30
     size = 256
-    say = ""                     # a sentence every stimulus speaks (espeak-ng), its expression the condition;
-                                 # or {text = "...", language = "en", rate_wpm = 175} (optional)
+    # say = "I have something to tell you"   # optional: every stimulus speaks it (espeak-ng), its
+    #   expression the condition; or say = {text = "...", language = "en", rate_wpm = 175}
     [design]
     within = ["basis", "view", "distance_m", "intensity"]
     order = "counterbalanced"
