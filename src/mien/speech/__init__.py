@@ -18,7 +18,11 @@ only to decode compressed audio.
 """
 
 from mien.speech.arbitration import SPEECH_CHANNELS, arbitrate
+from mien.speech.audio import mux_audio, read_audio, utterance_from_audio
 from mien.speech.coarticulation import coarticulate
+from mien.speech.espeak import speak, voices
+from mien.speech.openfacefx import read_openfacefx
+from mien.speech.timing_file import read_timing
 from mien.speech.track import TRACK_FPS, Audio, Segment, Utterance, VisemeTrack
 from mien.speech.visemes import VISEMES, rig_viseme_targets, viseme_arkit, viseme_aus
 
@@ -32,7 +36,14 @@ __all__ = [
     "VisemeTrack",
     "arbitrate",
     "coarticulate",
+    "mux_audio",
+    "read_audio",
+    "read_openfacefx",
+    "read_timing",
     "rig_viseme_targets",
+    "speak",
+    "utterance_from_audio",
     "viseme_arkit",
     "viseme_aus",
+    "voices",
 ]
