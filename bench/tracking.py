@@ -1,13 +1,21 @@
-"""Benchmark: tracking a video (decode + MediaPipe Face Landmarker), cache disabled.
+"""Benchmark: tracking a video (decode + MediaPipe Face Landmarker), sequential against parallel, cache disabled.
 
-Prints, as the median of REPEATS runs after a warm-up run on data/video/single_face.mp4 (2.4 s, 30 fps, 640x360):
-- the named baseline "decode only" (PyAV to RGB arrays, nothing else);
-- "landmarker only" on frames decoded beforehand (the model's own cost);
-- "track_video" (decode in a thread + landmarker + gap filling), its processed fps and the ratio to real time
-  (target >= 2x), and its time over the decode-only baseline.
+The shared videos are short (single_face.mp4: 2.4 s, 72 frames at 640x360), too short for worker processes to
+pay for their start-up, so the main video here is a longer one made from single_face.mp4's real frames:
+played forward then backward (no cut: the face moves continuously) up to SECONDS s, 640x360, 30 fps, H.264
+with a keyframe every 2 s (like a phone or webcam recording), written to a temporary folder.
 
-Run: .venv/bin/python bench/tracking.py [VIDEO] (needs the shared data and face_landmarker.task, found through
-$MIEN_SHARED or ../shared, and $MIEN_FACE_LANDMARKER or the shared model).
+Prints, with the load average beside the figures:
+1. agreement: ``track_video(workers=2)`` against the named baseline ``workers=1`` on the long video and on each
+   shared video: time stamps identical, faceless frames the same, and at each join the landmark and blendshape
+   differences per frame (max / median over the coordinates), beside the tracker's own frame-to-frame change;
+2. speed, REPEATS interleaved rounds after a warm-up: sequential (workers=1, the baseline) and parallel
+   (workers=2) on videos of 2.4, 5, 10 and 20 s:
+   median and spread, ratio to real time, parallel / sequential time: the break-even length behind
+   :data:`mien.tracking.parallel.MIN_FRAMES_PER_WORKER`.
+
+Run: .venv/bin/python bench/tracking.py [SECONDS] [REPEATS] (needs the shared data and face_landmarker.task,
+found through $MIEN_SHARED or ../shared, and $MIEN_FACE_LANDMARKER or the shared model).
 """
 
 from __future__ import annotations
@@ -15,60 +23,130 @@ from __future__ import annotations
 import os
 import statistics
 import sys
+import tempfile
 import time
-from collections.abc import Callable
 from pathlib import Path
 
-REPEATS = 3
+import numpy as np
 
 
 def _shared() -> Path:
     return Path(os.environ.get("MIEN_SHARED", Path(__file__).resolve().parents[1].parent / "shared"))
 
 
-def _median_s(work: Callable[[], object]) -> float:
-    work()  # warm-up: file cache, model load, XNNPACK setup
-    times = []
-    for _ in range(REPEATS):
-        start = time.perf_counter()
-        work()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
+def load() -> str:
+    """The 1, 5 and 15 minute load averages, as text."""
+    one, five, fifteen = os.getloadavg()
+    return f"load average {one:.2f} {five:.2f} {fifteen:.2f} on {os.cpu_count()} CPUs"
+
+
+def spread(values: list[float], scale: float = 1.0, unit: str = "") -> str:
+    """Median and min..max of ``values`` times ``scale``."""
+    return (
+        f"median {statistics.median(values) * scale:8.3f}{unit}  "
+        f"(min {min(values) * scale:.3f}, max {max(values) * scale:.3f})"
+    )
+
+
+def long_video(folder: Path, seconds: float, source: Path | None = None) -> Path:
+    """A ``seconds``-long 640x360 30 fps H.264 video (keyframe every 2 s) of single_face.mp4's frames played
+    forward then backward, written to ``folder``; returns its path."""
+    import av
+
+    from mien.tracking.video import iter_frames
+
+    source = source or _shared() / "data" / "video" / "single_face.mp4"
+    frames = [rgb for _, rgb in iter_frames(source)]
+    loop = frames + frames[-2:0:-1]
+    n = round(seconds * 30)
+    out = folder / f"single_face_{seconds:g}s.mp4"
+    with av.open(str(out), "w") as container:
+        stream = container.add_stream("libx264", rate=30)
+        stream.width, stream.height, stream.pix_fmt = frames[0].shape[1], frames[0].shape[0], "yuv420p"
+        stream.options = {"g": "60", "keyint_min": "60", "sc_threshold": "0"}
+        for i in range(n):
+            container.mux(stream.encode(av.VideoFrame.from_ndarray(loop[i % len(loop)], format="rgb24")))
+        container.mux(stream.encode(None))
+    return out
+
+
+def agreement(video: Path, model: Path) -> None:
+    """Print how ``workers=2`` agrees with ``workers=1`` on ``video``, per join frame."""
+    from mien.tracking.parallel import WARMUP_FRAMES
+    from mien.tracking.track import track_video
+    from mien.tracking.video import plan_segments
+
+    seq = track_video(video, model, use_cache=False, show_progress=False, workers=1)
+    par = track_video(video, model, use_cache=False, show_progress=False, workers=2)
+    same_times = np.array_equal(seq.timestamps_s, par.timestamps_s)
+    same_faces = np.array_equal(seq.face_found, par.face_found)
+    both = seq.face_found & par.face_found
+    step = np.abs(np.diff(seq.blendshapes[seq.face_found], axis=0))
+    noise = f"{np.median(step.max(axis=1)):.4f}" if step.size else "-"
+    print(
+        f"  {video.name}: {seq.n_frames} frames; time stamps identical {same_times}, faceless frames the same "
+        f"{same_faces}; tracker's own frame-to-frame change of the blendshapes (median of the per-frame max): {noise}"
+    )
+    plan = plan_segments(video, 2, WARMUP_FRAMES)
+    assert plan is not None
+    for segment in plan[1][1:]:
+        for j in range(segment.first_frame, min(segment.first_frame + 3, seq.n_frames)):
+            if not both[j]:
+                print(f"    join frame {j}: no face in {'both' if not seq.face_found[j] else 'one'}")
+                continue
+            marks = np.abs(seq.landmarks_px[j] - par.landmarks_px[j])
+            scores = np.abs(seq.blendshapes[j] - par.blendshapes[j])
+            print(
+                f"    join frame {j}: landmarks max {marks.max():.2f} px median {np.median(marks):.3f} px; "
+                f"blendshapes max {scores.max():.4f} median {np.median(scores):.5f}"
+            )
+    if both.any():
+        scores = np.abs(seq.blendshapes[both] - par.blendshapes[both])
+        print(
+            f"    every frame: blendshapes max {scores.max():.4f}, mean of the per-frame max {scores.max(1).mean():.4f}"
+        )
 
 
 def main() -> int:
     """Run the benchmark and print the results."""
     from mien.paths import asset_path
-    from mien.tracking.landmarker import Landmarker
     from mien.tracking.track import track_video
-    from mien.tracking.video import iter_frames, probe
 
-    video = Path(sys.argv[1]) if len(sys.argv) > 1 else _shared() / "data" / "video" / "single_face.mp4"
+    seconds = float(sys.argv[1]) if len(sys.argv) > 1 else 20.0
+    repeats = int(sys.argv[2]) if len(sys.argv) > 2 else 3
     model = asset_path("face_landmarker") or _shared() / "models" / "face_landmarker.task"
-    info = probe(video)
-    frames = list(iter_frames(video))
-    n = len(frames)
-    duration_s = n / info.fps
+    shared = _shared() / "data" / "video"
+    print(load())
+    with tempfile.TemporaryDirectory() as folder:
+        lengths = sorted({2.4, 5.0, 10.0, seconds})
+        videos = {s: shared / "single_face.mp4" if s == 2.4 else long_video(Path(folder), s) for s in lengths}
+        print("agreement, workers=2 against workers=1 (the baseline):")
+        for video in (
+            videos[seconds],
+            *(shared / n for n in ("single_face.mp4", "face_noface.mov", "noface_face.mov")),
+        ):
+            agreement(video, model)
 
-    decode_s = _median_s(lambda: sum(1 for _ in iter_frames(video)))
+        def run(video: Path, workers: int) -> float:
+            start = time.perf_counter()
+            track_video(video, model, use_cache=False, show_progress=False, workers=workers)
+            return time.perf_counter() - start
 
-    def landmarker_only() -> None:
-        with Landmarker(model, mode="video") as landmarker:
-            for time_s, rgb in frames:
-                landmarker.detect(rgb, time_s)
-
-    landmark_s = _median_s(landmarker_only)
-    track_s = _median_s(lambda: track_video(video, model, use_cache=False, show_progress=False))
-
-    print(f"video: {video.name}, {n} frames, {info.width}x{info.height} at {info.fps:g} fps ({duration_s:.2f} s)")
-    print(f"median of {REPEATS} runs after a warm-up, cache disabled")
-    print(f"  baseline decode only : {decode_s * 1000:8.1f} ms  {n / decode_s:7.1f} fps")
-    print(f"  landmarker only      : {landmark_s * 1000:8.1f} ms  {n / landmark_s:7.1f} fps")
-    print(f"  track_video          : {track_s * 1000:8.1f} ms  {n / track_s:7.1f} fps")
-    print(f"  track_video vs real time        : {duration_s / track_s:5.2f}x (target >= 2x)")
-    print(f"  track_video / decode-only time  : {track_s / decode_s:5.2f}x")
-    overlap = (decode_s + landmark_s) / track_s
-    print(f"  (decode + landmarker separately) / track_video: {overlap:5.2f}x (decode overlapped in a thread)")
+        run(videos[2.4], 1)  # warm-up: file cache, model load
+        timings: dict[tuple[float, int], list[float]] = {(s, w): [] for s in lengths for w in (1, 2)}
+        for _ in range(repeats):
+            for s in lengths:
+                for w in (1, 2):
+                    timings[s, w].append(run(videos[s], w))
+        print(f"speed, {repeats} interleaved rounds after a warm-up, cache disabled ({load()}):")
+        for s in lengths:
+            seq, par = timings[s, 1], timings[s, 2]
+            for label, values in (("workers=1 (baseline)", seq), ("workers=2           ", par)):
+                real_time = spread([s / t for t in values], 1, "x")
+                print(f"  {s:4.1f} s video, {label}: {spread(values, 1000, ' ms')}  vs real time {real_time}")
+            ratio = [p / q for p, q in zip(par, seq, strict=True)]
+            print(f"  {s:4.1f} s video, parallel / sequential: {spread(ratio, 1, '')}")
+    print(load())
     return 0
 
 
