@@ -181,3 +181,18 @@ def test_a_viewer_that_joins_mid_sentence_is_told_and_a_queue_flood_is_refused(l
     time.sleep(0.2)
     assert live.server.clock.stats.ticks > ticks
     assert_unharmed(live)
+
+
+def test_say_over_the_websocket_goes_to_the_watched_character(live) -> None:
+    with sync_client.connect(f"ws://127.0.0.1:{live.http_port}/ws?character=b", max_size=2**20) as ws:
+        ws.send(json.dumps({"say": {"text": "hello there", "language": "en-us", "rate_wpm": 200}}))
+        for _ in range(600):  # bounded: the announcement comes within a few ticks of the synthesis
+            data = ws.recv(timeout=10)
+            if isinstance(data, str):
+                speech = json.loads(data)["speech"]
+                break
+        else:
+            pytest.fail("no speech announcement")
+    assert speech["character"] == "b" and speech["text"] == "hello there"
+    assert httpx.get(f"{live.base_url}{speech['url']}").status_code == 200
+    assert httpx.get(f"{live.base_url}/api/health").json()["ws_commands_accepted"] >= 1
