@@ -101,15 +101,26 @@ class StimulusScore:
             return None
         return self._judged(framing, reading, both=True)
 
+    def _top_two(self, framing: str | None, reading: str | None) -> tuple[str, str] | None:
+        """The two top labels of :meth:`probabilities` (None when not measured), worked out once per judge: a
+        scorecard asks each score about every reading of every target."""
+        cache: dict[tuple[str | None, str | None], tuple[str, str] | None] = self.__dict__.setdefault("_ranked", {})
+        key = (framing, reading)
+        if key not in cache:
+            probabilities = self.probabilities(framing, reading)
+            if len(probabilities) != len(EMOTION_LABELS) or not np.all(np.isfinite(probabilities)):
+                cache[key] = None
+            else:
+                order = np.argsort(probabilities)[::-1]
+                cache[key] = EMOTION_LABELS[int(order[0])], EMOTION_LABELS[int(order[1])]
+        return cache[key]
+
     def _judged(self, framing: str | None, reading: str | None, both: bool) -> bool | None:
-        probabilities = self.probabilities(framing, reading)
-        if len(probabilities) != len(EMOTION_LABELS) or not np.all(np.isfinite(probabilities)):
-            return None
+        ranked = self._top_two(framing, reading)
         expected = expected_labels(self.stimulus.expression)
-        if expected is None:
-            return None  # the classifier has no label for it (a laughter type...)
-        order = np.argsort(probabilities)[::-1]
-        first, second = EMOTION_LABELS[int(order[0])], EMOTION_LABELS[int(order[1])]
+        if ranked is None or expected is None:
+            return None  # not measured, or the classifier has no label for it (a laughter type...)
+        first, second = ranked
         return {first, second} == set(expected) if both else first in expected
 
 
