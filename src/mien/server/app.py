@@ -192,6 +192,7 @@ class LiveServer:
             self._udp = None
         if self.capture is not None:
             await asyncio.to_thread(self.capture.stop)
+        await asyncio.to_thread(self.registry.speech.close)
         if self._tasks:
             with contextlib.suppress(asyncio.TimeoutError):
                 await asyncio.wait_for(asyncio.shield(self._tasks[1]), 5.0)

@@ -231,7 +231,7 @@ class Registry:
         one laugh on a scratch batch (imports the laughter extra and fills its caches: about 0.3-0.5 s cold,
         1-5 ms after). Without the laughter extra, laugh messages are rejected on arrival from now on
         (:attr:`missing`). The characters' heads are loaded by :meth:`add`."""
-        self.speech.warm_up()  # libespeak-ng and its voices load once, before the clock
+        self.speech.warm_up()  # libespeak-ng and its voices load in a background thread
         scratch = CharacterBatch(1, idle=False)
         try:
             scratch.laugh(0, LAUGH_TYPES[1])

@@ -144,7 +144,7 @@ class SpeechService:
         """Utterances started."""
         self._speak = speak
         self._voices: frozenset[str] | None = None
-        self._requests: queue.Queue[tuple[int, str, SayRequest]] = queue.Queue(MAX_PENDING_SAYS)
+        self._requests: queue.Queue[tuple[int, str, SayRequest] | None] = queue.Queue(MAX_PENDING_SAYS)
         self._done: deque[_Done] = deque()
         self._kept: OrderedDict[int, Spoken] = OrderedDict()
         self._ids = itertools.count(1)
@@ -154,13 +154,20 @@ class SpeechService:
     # ------------------------------------------------------------------ arrival (any thread)
 
     def warm_up(self) -> None:
-        """Load the TTS and its voice list and speak one word, before the clock starts (about 1 s cold)."""
+        """Load the TTS and its voice list and speak one word in a background thread (about 1 s cold), so the
+        server starts without waiting and the first ``say`` finds it ready; without libespeak-ng, ``say`` is
+        refused (``no_tts``) from then on."""
+        threading.Thread(target=self._warm, name="mien-tts-warm-up", daemon=True).start()
+
+    def _warm(self) -> None:
         try:
             self._voice_list()
             self._synthesize(SayRequest("a"))
         except MissingAssetError as exc:
             self.unavailable = str(exc)
             log.warning("say commands will be rejected: %s", exc)
+        except Exception:  # a broken TTS is reported when a say uses it, not here
+            log.debug("warming up the TTS failed", exc_info=True)
 
     def _voice_list(self) -> frozenset[str]:
         if self._voices is None:
@@ -216,9 +223,20 @@ class SpeechService:
 
         return speak(say.text, say.language, say.rate_wpm)
 
+    def close(self) -> None:
+        """Stop the worker after the synthesis it is running (the server stops); later says are refused."""
+        self.unavailable = "the server is stopping"
+        thread, self._thread = self._thread, None
+        if thread is not None:
+            self._requests.put(None)  # blocks at most until the worker takes the next request
+            thread.join(5.0)
+
     def _work(self) -> None:
         while True:
-            utterance_id, character_id, say = self._requests.get()
+            request = self._requests.get()
+            if request is None:
+                return
+            utterance_id, character_id, say = request
             utterance, wav, error = None, b"", None
             try:
                 utterance = self._synthesize(say)
