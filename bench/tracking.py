@@ -71,13 +71,19 @@ def long_video(folder: Path, seconds: float, source: Path | None = None) -> Path
 
 
 def agreement(video: Path, model: Path) -> None:
-    """Print how ``workers=2`` agrees with ``workers=1`` on ``video``, per join frame."""
+    """Print how ``workers=2`` agrees with ``workers=1`` on ``video``, per join frame (even segments: the join in
+    the middle of the video)."""
+    import mien.tracking.parallel as parallel
     from mien.tracking.parallel import WARMUP_FRAMES
     from mien.tracking.track import track_video
     from mien.tracking.video import plan_segments
 
     seq = track_video(video, model, use_cache=False, show_progress=False, workers=1)
-    par = track_video(video, model, use_cache=False, show_progress=False, workers=2)
+    lead, parallel.LEAD_FRAMES = parallel.LEAD_FRAMES, 0
+    try:
+        par = track_video(video, model, use_cache=False, show_progress=False, workers=2)
+    finally:
+        parallel.LEAD_FRAMES = lead
     same_times = np.array_equal(seq.timestamps_s, par.timestamps_s)
     same_faces = np.array_equal(seq.face_found, par.face_found)
     both = seq.face_found & par.face_found

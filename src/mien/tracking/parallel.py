@@ -34,7 +34,15 @@ from mien.facs.arkit import ARKIT_NAMES
 from mien.progress import progress
 from mien.tracking.landmarker import N_LANDMARKS
 
-__all__ = ["MAX_WORKERS", "MIN_FRAMES_PER_WORKER", "WARMUP_FRAMES", "FrameArrays", "default_workers", "track_frames"]
+__all__ = [
+    "LEAD_FRAMES",
+    "MAX_WORKERS",
+    "MIN_FRAMES_PER_WORKER",
+    "WARMUP_FRAMES",
+    "FrameArrays",
+    "default_workers",
+    "track_frames",
+]
 
 WARMUP_FRAMES = 3
 """Frames before a later segment that its worker tracks and drops, so the tracker has the face at the join."""
@@ -43,6 +51,10 @@ MIN_FRAMES_PER_WORKER = 150
 """Fewest frames per process worth a worker: a worker's start-up (Python, mien, MediaPipe, the model: about 2 s
 on the 2-core development machine) costs about as much as tracking 60 to 150 frames (bench/tracking.py), so a
 video shorter than ``2 * MIN_FRAMES_PER_WORKER`` frames (10 s at 30 fps) is tracked in one process."""
+
+LEAD_FRAMES = 100
+"""Frames the calling process tracks, beyond an even share, while its workers start (:data:`MIN_FRAMES_PER_WORKER`
+explains the start-up; both it and a frame's tracking are CPU work, so the ratio holds on a busy machine)."""
 
 MAX_WORKERS = 8
 """Most processes :func:`default_workers` picks (each holds a MediaPipe graph, ~100 MB)."""
@@ -161,7 +173,7 @@ def track_frames(
 
     check_workers(workers)
     count = default_workers(n_frames) if workers is None else workers
-    plan = plan_segments(path, count, WARMUP_FRAMES) if count > 1 else None
+    plan = plan_segments(path, count, WARMUP_FRAMES, LEAD_FRAMES) if count > 1 else None
     desc = f"tracking {path.name}"
     if plan is None:
         run = _Run(_whole(prefetch(iter_frames(path))), model, min_confidence)
@@ -222,7 +234,8 @@ def _drain(progress_queue: Any, timeout_s: float = 0.0) -> Iterator[None]:
     try:
         count = progress_queue.get(timeout=timeout_s) if timeout_s > 0 else progress_queue.get_nowait()
         while True:
-            yield from range(count)
+            for _ in range(count):
+                yield None
             count = progress_queue.get_nowait()
     except queue.Empty:
         return

@@ -182,13 +182,15 @@ class Segment:
 
 
 def plan_segments(
-    path: str | os.PathLike[str], n_segments: int, warmup_frames: int = 0
+    path: str | os.PathLike[str], n_segments: int, warmup_frames: int = 0, lead_frames: int = 0
 ) -> tuple[float, tuple[Segment, ...]] | None:
     """Split a video into ``n_segments`` contiguous runs of frames that separate decoders can read in parallel.
 
     Reads the container's packets (decodes one frame: the first, whose time is the origin of every time stamp)
     and returns ``(origin_s, segments)``: the first frame's time in seconds (what :func:`iter_frames` subtracts)
-    and the segments, cut evenly by frame count. Each later segment decodes from the last keyframe at or before
+    and the segments, cut evenly by frame count except that the first gets ``lead_frames`` more than an even
+    share minus an even share of them (the frames its reader handles while the others are still starting;
+    every segment keeps at least two frames). Each later segment decodes from the last keyframe at or before
     its first warm-up frame (``warmup_frames`` frames before its first frame). Returns None where a video
     cannot be split safely, so the caller reads it whole with :func:`iter_frames` (which then raises the usual
     error for a damaged file): PyAV missing, fewer than ``2 * n_segments`` frames, packets without time stamps,
@@ -230,7 +232,9 @@ def plan_segments(
     if len(frames) < 2 * n_segments or not keys:
         return None
     keys.sort()
-    cuts = [round(i * len(frames) / n_segments) for i in range(n_segments + 1)]
+    n = len(frames)
+    first = min(max(round((n + lead_frames * (n_segments - 1)) / n_segments), 2), n - 2 * (n_segments - 1))
+    cuts = [0] + [first + round(i * (n - first) / (n_segments - 1)) for i in range(n_segments)]
     segments = []
     for i in range(n_segments):
         start, stop = cuts[i], cuts[i + 1]
