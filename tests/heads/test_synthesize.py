@@ -3,6 +3,7 @@ table is ICT-FaceKit's own moves."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -10,9 +11,10 @@ import pytest
 from tests.conftest import valid_avatar
 
 from mien.heads import load_head
+from mien.heads import synthesize as synthesize_module
 from mien.heads.amplitude import face_scale_mm, feature_moves, reference_moves
 from mien.heads.inspect import inspect_head
-from mien.heads.synthesize import missing_targets, synthesize_targets
+from mien.heads.synthesize import missing_targets, synthesize_cached, synthesize_targets
 from mien.rig.feature_points import FEATURE_NAMES
 from mien.rig.files import FileRig
 
@@ -74,3 +76,27 @@ def test_head_inspect_reports_the_synthesized_shapes(landmarker_path: Path) -> N
     assert "synthesized (7, the reference head's moves through the feature-point fields):" in report
     assert "mouthStretchLeft" in report and "no mouthStretchLeft" not in report
     assert "no mouthClose: AU8 cannot show" in report  # a correction of another shape: not made
+
+
+def test_the_shapes_are_made_once_per_file_then_read_from_the_cache(
+    white: FileRig, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    monkeypatch.setenv("MIEN_CACHE_DIR", str(tmp_path))
+    lacking = replace(white, targets=tuple(t for t in white.targets if t.name not in reference_moves()
+                                           or t.name.startswith(("browDown", "jaw"))))  # fmt: skip
+    first, made = synthesize_cached(lacking, "0" * 64)
+    assert "mouthStretchLeft" in made and "browInnerUp" in made
+    calls: list[object] = []
+    monkeypatch.setattr(synthesize_module, "synthesize_targets", lambda *args, **kwargs: calls.append(args))
+    second, again = synthesize_cached(lacking, "0" * 64)
+    assert again == made and not calls  # read back, not remade
+    for one, other in zip(first.targets, second.targets, strict=True):
+        assert one.name == other.name
+        np.testing.assert_array_equal(one.vertex_ids, other.vertex_ids)
+        np.testing.assert_array_equal(one.deltas, other.deltas)
+    monkeypatch.undo()
+    monkeypatch.setenv("MIEN_CACHE_DIR", str(tmp_path))
+    (entry,) = (tmp_path / "heads").glob("*.npz")
+    entry.write_bytes(b"not an npz")  # a broken entry is remade, not trusted
+    third, _ = synthesize_cached(lacking, "0" * 64)
+    np.testing.assert_array_equal(third.targets[-1].deltas, first.targets[-1].deltas)

@@ -18,8 +18,8 @@ from mien.extras import require
 from mien.fileio.streams import atomic_path
 from mien.heads.amplitude import MAX_GAIN, calibrate_amplitudes
 from mien.heads.instrument import Instrumentation
-from mien.heads.registry import instrument_head
-from mien.heads.synthesize import synthesize_targets
+from mien.heads.registry import file_fingerprint, instrument_head
+from mien.heads.synthesize import synthesize_cached
 from mien.render.camera import Camera
 from mien.render.clip_render import render_still
 from mien.rig.files.head import FileRig
@@ -137,7 +137,8 @@ def inspect_head(
     gains: dict[str, float] = {}
     made: tuple[str, ...] = ()
     if isinstance(rig, FileRig) and rig.info is not None:
+        path = rig.info.path
         rig, found = instrument_head(rig, landmarker_model)
         rig, gains = calibrate_amplitudes(rig)
-        rig, made = synthesize_targets(rig)
+        rig, made = synthesize_cached(rig, file_fingerprint(path))
     return HeadInspection(spec, rig, found, gains, made)

@@ -22,7 +22,7 @@ from mien.heads.amplitude import calibrate_amplitudes
 from mien.heads.instrument import Instrumentation, instrument_cached
 from mien.heads.mouth import mouth_regions
 from mien.heads.placement import place_rig
-from mien.heads.synthesize import missing_targets, synthesize_targets
+from mien.heads.synthesize import synthesize_cached
 from mien.render.camera import Camera
 from mien.render.clip_render import FrameRenderer, make_renderer
 from mien.rig.feature_points import FeaturePointRig
@@ -82,21 +82,19 @@ def load_head(
     (``pip install 'mien[track]'``) and its ``face_landmarker.task`` (``landmarker_model`` or the configured
     asset), its timid shapes are driven as far as the reference head's (``calibrate``;
     :mod:`mien.heads.amplitude`), and the ARKit shapes it lacks are made through the feature-point fields
-    (:mod:`mien.heads.synthesize`: a Rocketbox head's lip stretcher; about 2 s). With ``feature_points`` the
-    Broekens feature-point rig is compiled onto the head (54 extra targets ``fp_<Feature>_<axis>``) with its
-    skin-detail correctives (``fpc_<shape>``, :mod:`mien.rig.fp_correctives`).
+    (:mod:`mien.heads.synthesize`: a Rocketbox head's lip stretcher; about 2 s, then cached). With
+    ``feature_points`` the Broekens feature-point rig is compiled onto the head (54 extra targets
+    ``fp_<Feature>_<axis>``) with its skin-detail correctives (``fpc_<shape>``, :mod:`mien.rig.fp_correctives`).
     """
     rig = open_head(name, identity)
-    fp = None
     if isinstance(rig, FileRig) and rig.info is not None:
+        path = rig.info.path
         rig, _ = instrument_head(rig, landmarker_model)
         if calibrate:
             rig, _ = calibrate_amplitudes(rig)
-        if missing_targets(rig):
-            fp = FeaturePointRig.build(rig)
-            rig, _ = synthesize_targets(rig, fp=fp)
+        rig, _ = synthesize_cached(rig, file_fingerprint(path))
     if feature_points:
-        fp = fp or FeaturePointRig.build(rig)
+        fp = FeaturePointRig.build(rig)
         rig = rig.with_targets(fp.compile())
         rig = rig.with_targets(corrective_targets(fp, rig))
     return rig

@@ -12,13 +12,21 @@ brows), the shape is the smoothest skin through the reference's moves, and it is
 
 from __future__ import annotations
 
+import io
+
 import numpy as np
 
+from mien.fileio.streams import write_bytes
 from mien.heads.amplitude import face_scale_mm, reference_moves
+from mien.heads.instrument import INSTRUMENT_VERSION
+from mien.paths import cache_dir
 from mien.rig.feature_points import FeaturePointRig
 from mien.rig.model import MorphTarget, Rig
 
-__all__ = ["MIN_FEATURE_MOVE_MM", "missing_targets", "synthesize_targets"]
+__all__ = ["MIN_FEATURE_MOVE_MM", "SYNTHESIS_VERSION", "missing_targets", "synthesize_cached", "synthesize_targets"]
+
+SYNTHESIS_VERSION = 1
+"""Bumped when the method or the reference table changes, so cached shapes of an older method are remade."""
 
 MIN_FEATURE_MOVE_MM = 0.5
 """A reference move smaller than this (mm at a 90 mm face) is left out of a synthesized shape: the reference's
@@ -56,3 +64,33 @@ def synthesize_targets(
         ids = np.flatnonzero(np.abs(dense).max(axis=1) > 1e-7).astype(np.int32)
         made.append(MorphTarget(name, ids, dense[ids].astype(np.float32)))
     return rig.with_targets(tuple(made)), wanted
+
+
+def synthesize_cached(rig: Rig, file_sha256: str) -> tuple[Rig, tuple[str, ...]]:
+    """:func:`synthesize_targets` of the missing targets, cached per head file (``file_sha256``, with the
+    instrumenting's and this method's versions) in ``$MIEN_CACHE_DIR/heads``: a second load reads the shapes
+    (about 2 s of field solving saved). An unreadable cache entry is remade, never trusted."""
+    wanted = missing_targets(rig)
+    if not wanted:
+        return rig, ()
+    path = cache_dir("heads") / f"{file_sha256}.synth-{INSTRUMENT_VERSION}-{SYNTHESIS_VERSION}.npz"
+    if path.is_file():
+        try:
+            with np.load(path) as data:
+                made = tuple(
+                    MorphTarget(name, data[f"{name}.ids"].astype(np.int32), data[f"{name}.deltas"].astype(np.float32))
+                    for name in wanted
+                )
+            if all(len(t.vertex_ids) == len(t.deltas) and t.vertex_ids.max(initial=0) < rig.n_vertices for t in made):
+                return rig.with_targets(made), wanted
+        except (OSError, KeyError, ValueError):
+            pass
+    out, wanted = synthesize_targets(rig, wanted)
+    arrays = {}
+    for target in out.targets[-len(wanted) :]:
+        arrays[f"{target.name}.ids"] = target.vertex_ids
+        arrays[f"{target.name}.deltas"] = target.deltas
+    buffer = io.BytesIO()
+    np.savez(buffer, **arrays)  # type: ignore[arg-type]
+    write_bytes(buffer.getvalue(), path)
+    return out, wanted
