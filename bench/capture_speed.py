@@ -15,7 +15,7 @@ Prints medians and spread (min..max), each against real time (target >= 4x for c
 sequential tracking, and the capture's cost on top of tracking (target <= 10%), both as the ratio of whole runs
 and as solve + filter / tracking per round; the load average before and after (the machine is shared).
 
-Run: .venv/bin/python bench/capture_speed.py [VIDEO] [REPEATS] (needs the shared data and face_landmarker.task,
+Run: .venv/bin/python bench/capture_speed.py [VIDEO or ""] [REPEATS] (needs the shared data and face_landmarker.task,
 found through $MIEN_SHARED or ../shared, and $MIEN_FACE_LANDMARKER or the shared model).
 """
 
@@ -33,7 +33,7 @@ from tracking import _shared, load, long_video, spread  # bench/tracking.py, bes
 def main() -> int:
     """Run the benchmark and print the results."""
     with tempfile.TemporaryDirectory() as folder:
-        video = Path(sys.argv[1]) if len(sys.argv) > 1 else long_video(Path(folder), 20.0)
+        video = Path(sys.argv[1]) if len(sys.argv) > 1 and sys.argv[1] else long_video(Path(folder), 20.0)
         return _bench(video, int(sys.argv[2]) if len(sys.argv) > 2 else 5)
 
 
