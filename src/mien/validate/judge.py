@@ -1,14 +1,14 @@
 """The averaged judge: what one verdict of ``mien validate`` is.
 
-A verdict on a rendered face is never the classifier's answer on one crop. The face is rendered at two sizes
-(:data:`RENDER_SCALES` of the run's size, from the same camera), the face's landmarks are found once on the larger
-render (MediaPipe; scaled to the smaller one, whose pixels are the same picture at another resolution), and the
-classifier reads the face under every crop of :data:`JUDGE_CROPS` on both renders: both framings of
-:data:`~mien.validate.emotion_classifier.FRAMINGS` ("landmarks": brows to chin; "fer": the fer package's own,
-forehead to chin), each at its place and jittered by a few percent in position and scale. The verdict's
-probabilities are the mean of those 2 x 6 = 12 readings; the top label of the mean is the verdict. Every reading
-is kept (:attr:`~mien.validate.scores.StimulusScore.crops`), so each figure can be given with its spread: the
-same figure judged by each crop alone, lowest to highest (:meth:`~mien.validate.scores.RecognitionResult.spread`).
+A verdict on a rendered face is never the classifier's answer on one crop. The face is rendered at the run's size and
+also taken at :data:`RENDER_SCALES` of it (by default the render reduced by area averaging, :func:`resample`: the
+same picture as a camera with fewer pixels records it), its landmarks found once on the larger picture (MediaPipe;
+scaled to the smaller), and the classifier reads the face under every crop of :data:`JUDGE_CROPS` on both: both
+framings of :data:`~mien.validate.emotion_classifier.FRAMINGS` ("landmarks": brows to chin; "fer": the fer
+package's own, forehead to chin), each at its place and jittered by a few percent in position and scale. The
+verdict's probabilities are the mean of those 2 x 6 = 12 readings; the top label of the mean is the verdict. Every
+reading is kept (:attr:`~mien.validate.scores.StimulusScore.crops`), so each figure can be given with its spread:
+the same figure judged by each crop alone, lowest to highest (:meth:`~mien.validate.scores.RecognitionResult.spread`).
 
 So a face that reads under one framing only does not pass on that framing's say: the other framing's six readings
 pull the mean away. The jitter is the size of the disagreement between the two ways a face is usually framed

@@ -9,8 +9,11 @@ the detection records it.
 
 Metrics, per expression over all renders:
 
+* every verdict from the averaged judge (:mod:`mien.validate.judge`): the classifier's probabilities averaged over
+  twelve crops of the face (two picture sizes, both framings, jittered), each reading kept for the spread;
 * recognition rate: share of renders whose top label is the expression's label (basic emotions and neutral);
-  for a blend, the share whose two top labels are its components' labels (where the classifier has them);
+  for a blend, the share whose top label is one of its components' (as the study judged blends; the share whose
+  two top labels are both components is reported beside it);
 * confusion matrix: expression x top label;
 * quality (Broekens' Table 4 metric ``target / (mean over labels x number of labels)``): with probabilities
   summing to 1 over the classifier's labels, it is the mean probability of the target label; the study's

@@ -2,7 +2,8 @@
 
 A :class:`RecognitionResult` holds one :class:`StimulusScore` per :class:`Stimulus` (made by
 :func:`mien.validate.recognition.run_recognition`, or by :mod:`mien.study.machine` from a study's videos) and
-answers the questions of the report: recognition rate (top label; a blend's two top labels its components'),
+answers the questions of the report: recognition rate (top label; a blend's top label one of its components'), the
+spread of each rate across the averaged judge's crops,
 confusion, Broekens' quality, the FACS reading's verdicts, the targets per head (:mod:`mien.validate.targets`).
 """
 
