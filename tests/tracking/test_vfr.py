@@ -135,3 +135,21 @@ def test_a_variable_rate_copy_of_a_real_video_keeps_its_timing(
     (curves,) = controllers_from_track(variable)
     assert curves.fps == pytest.approx(variable.fps)
     assert curves.n_frames == int(np.floor(variable.timestamps_s[-1] * variable.fps + 1e-6)) + 1
+
+
+def test_segments_of_a_variable_rate_video_keep_every_time_stamp(tmp_path: Path) -> None:
+    """The parallel tracker's segments (mien.tracking.parallel) read an irregular video's frames with the same
+    time stamps, to the bit, as one reader."""
+    from mien.tracking.video import iter_segment, plan_segments
+
+    rng = np.random.default_rng(3)
+    frames = [rng.integers(0, 255, (48, 64, 3), dtype=np.uint8) for _ in range(30)]
+    stamps = np.concatenate([[0], np.cumsum([INTERVALS_MS[i % len(INTERVALS_MS)] for i in range(29)])]).tolist()
+    video = tmp_path / "vfr.mp4"
+    _encode(video, frames, stamps, Fraction(1, 1000))
+    whole = [t for t, _ in iter_frames(video)]
+    plan = plan_segments(video, 3, warmup_frames=2)
+    assert plan is not None
+    origin_s, segments = plan
+    joined = [t for segment in segments for t, _, warm in iter_segment(video, segment, origin_s) if not warm]
+    assert joined == whole and np.allclose(np.diff(whole), np.diff(stamps) / 1000.0)
