@@ -96,7 +96,7 @@ def test_say_over_udp_moves_the_streamed_mouth_and_closes_it_on_bilabials(live, 
             assert weights[near(middle), press].max() > 0.2, (segment, weights[near(middle), press])
         elif segment.phoneme in VOWELS:
             opens += 1
-            assert weights[near(middle), jaw].max() > 0.2, (segment, weights[near(middle), jaw])
+            assert weights[near(middle), jaw].max() > 0.15, (segment, weights[near(middle), jaw])
     assert closures >= 5 and opens >= 5
     assert weights[-1, jaw] == 0.0 and weights[-1, press] == 0.0  # the mouth is at rest after it
     # the clock ticked on through the synthesis and the utterance, and no tick failed
