@@ -69,6 +69,10 @@ class UdpClient:
         """Move the PAD state (each -1..1)."""
         self.send_json({"pad": [pleasure, arousal, dominance], "character": character})
 
+    def say(self, text: str, language: str = "en", rate_wpm: int = 175, character: str | None = None) -> None:
+        """Make the character speak ``text`` (espeak-ng on the server; at most 400 characters, see docs/SERVER.md)."""
+        self.send_json({"say": {"text": text, "language": language, "rate_wpm": rate_wpm}, "character": character})
+
     def send_json(self, message: Mapping[str, Any]) -> None:
         """Send any message (keys with value None are left out)."""
         self.send_raw(json.dumps({k: v for k, v in message.items() if v is not None}).encode())

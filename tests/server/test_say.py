@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 from tests.server.conftest import assert_unharmed
 
+from mien.client import UdpClient
 from mien.server.protocol import MAX_MESSAGE_BYTES, MAX_SAY_CHARS, decode_frame
 from mien.speech.audio import energy_envelope
 from mien.speech.track import Audio
@@ -69,7 +70,8 @@ def test_say_over_udp_moves_the_streamed_mouth_and_closes_it_on_bilabials(live, 
     ticks_before = live.server.clock.stats.ticks
     with sync_client.connect(f"ws://127.0.0.1:{live.http_port}/ws?character=a", max_size=2**20) as ws:
         decode_frame(ws.recv(timeout=10))
-        _send_udp(live.udp_port, {"say": SENTENCE, "character": "a"})
+        with UdpClient("127.0.0.1", live.udp_port) as client:
+            client.say(SENTENCE, character="a")
         announcement, frames = _stream_until_silent(ws)
     assert announcement["character"] == "a" and announcement["text"] == SENTENCE
     assert announcement["duration_s"] == pytest.approx(spoken_offline.duration_s)
