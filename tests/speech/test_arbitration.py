@@ -129,3 +129,20 @@ def test_say_replaces_and_removal_silences() -> None:
         batch.say(0, 42)  # type: ignore[arg-type]
     with pytest.raises(InvalidValueError, match="start_s"):
         batch.say(0, _utterance(), start_s=float("nan"))
+
+
+def test_many_utterances_through_a_compacting_pool_stay_right() -> None:
+    """Fresh utterances said again and again (the pool compacts and grows) give each row what it alone gives."""
+    batch = CharacterBatch(np.array([1, 2, 3, 4]), idle=False)
+    singles = [Character(seed=s, idle=False) for s in (1, 2, 3, 4)]
+    for i in range(120):
+        t = i / 20
+        if i % 4 == 0:
+            row = (i // 4) % 4
+            utterance = _utterance()  # a new object each time: compiled and stored anew
+            batch.say(row, utterance)
+            singles[row].say(utterance)
+        frames = batch.step(t)
+        for row, face in enumerate(singles):
+            assert np.allclose(frames[row], face.step(t), atol=1e-9), (row, t)
+    assert batch.speech._pool.shape[0] >= 1024

@@ -35,12 +35,13 @@ _N_VISEMES = len(VISEMES)
 _STEP_COLUMNS = 2 * _W + 1
 """What a step reads: speech values and keep fractions over SPAN, and the presence."""
 _COLUMNS = _STEP_COLUMNS + _N_VISEMES
-_POOL_COLUMNS = 2 * _STEP_COLUMNS + _N_VISEMES
+_POOL_COLUMNS = -(-(_W + 1) // 16) * 16
+"""A pool row: the speech values over SPAN and the presence, float32, padded to 64 bytes (one cache line: a
+step gathers one line per row wherever each row is in its utterance)."""
+_PRESENCE = _W
 """A pool row: the step columns, their slope to the next frame, the viseme weights."""
 _N_FACE = viseme_aus().shape[1]
 _IN_SPAN = SPEECH_CHANNELS - SPAN.start
-_SILENT = np.concatenate([np.zeros(_W), np.ones(_W), [1.0]])
-"""The step columns of a row that is not speaking: nothing added, everything kept, quiet."""
 _SHAPES = np.ascontiguousarray(viseme_aus()[:, SPEECH_CHANNELS])
 """(15, k) the visemes' shapes on the speech channels (C order: the product is 10x faster)."""
 _QUIET = 2 * _W
@@ -94,7 +95,7 @@ class SpeechBatch:
         self._utterances: dict[int, Utterance] = {}
         self._spans: dict[int, tuple[int, int]] = {}
         self._stored: dict[Utterance, tuple[int, int]] = {}
-        self._pool, self._pool_visemes = _silent_pools(1024)
+        self._pool, self._pool_visemes = _empty_pools(1024)
         self._used = 1
         self._quiet = np.ones(n)
         self._live_from = np.full(n, -math.inf)
@@ -113,7 +114,7 @@ class SpeechBatch:
     @property
     def presence(self) -> np.ndarray:
         """(n,) how much speech held each row's mouth at the last step, 0..1 (0: silent)."""
-        return 1.0 - self._quiet
+        return np.asarray(1.0 - self._quiet, dtype=np.float64)
 
     @property
     def viseme_weights(self) -> np.ndarray:
@@ -179,7 +180,8 @@ class SpeechBatch:
             frames = _COMPILED[utterance] = speech_frames(utterance)
         self._settle()  # the pool may move
         stored = self._stored.get(utterance)
-        offset = stored[0] if stored is not None and stored in self._spans.values() else self._store(frames)
+        # an utterance already in the pool is shared (compaction keeps _stored to the spans it keeps)
+        offset = stored[0] if stored is not None else self._store(frames)
         self._stored[utterance] = (offset, frames.shape[0])
         changed = np.asarray(rows).ravel().tolist()
         for row in changed:
@@ -198,7 +200,7 @@ class SpeechBatch:
         if self._used + need > self._pool.shape[0]:
             live = set(self._spans.values())
             size = 1 + sum(length for _, length in live) + need
-            pool, visemes = _silent_pools(max(2 * size, 1024))
+            pool, visemes = _empty_pools(max(2 * size, 1024))
             moved: dict[tuple[int, int], int] = {}
             used = 1
             for offset, length in sorted(live):
@@ -211,8 +213,10 @@ class SpeechBatch:
                 self._offset[row] = moved[(offset, length)]
             self._stored = {u: (moved[span], span[1]) for u, span in self._stored.items() if span in moved}
             self._pool, self._pool_visemes, self._used = pool, visemes, used
+            self._rows = np.zeros(0, np.intp)  # offsets moved: the next _refresh rebuilds every cache
         offset = self._used
-        self._pool[offset : offset + need] = frames[:, :_STEP_COLUMNS]
+        self._pool[offset : offset + need, :_W] = frames[:, :_W]
+        self._pool[offset : offset + need, _PRESENCE] = 1.0 - frames[:, _QUIET]
         self._pool_visemes[offset : offset + need] = frames[:, _STEP_COLUMNS:]
         self._used += need
         return offset
@@ -279,25 +283,20 @@ class SpeechBatch:
                     continue
                 hold = 1.0 - max(_cover(t_s, laugh.start_s, laugh.end_s) for laugh in active)
                 if hold < 1.0:
-                    # every step column is affine in the presence and equals _SILENT at 0: scaling the presence
-                    # by hold is _SILENT + hold * (values - _SILENT), for the speech, the keep and the quiet alike
-                    held = values[i]
-                    held -= _SILENT
-                    held *= hold
-                    held += _SILENT
+                    values[i] *= hold  # the speech values and the presence are linear in the viseme weights
+        presence = values[:, _PRESENCE]
+        keep = keep_fraction(presence)  # the rule: face * keep + speech over SPAN (arbitrate's, in place)
         if self._every_row and frames.shape[0] == rows.size:
             block = frames[:, SPAN]  # a view: the rule applied in place
-            block *= values[:, _W : 2 * _W]
+            block *= keep
             block += values[:, :_W]
-            quiet = values[:, _QUIET]
-            self._quiet = quiet
+            self._quiet = 1.0 - presence
         else:
             block = frames[rows, SPAN]
-            block *= values[:, _W : 2 * _W]
+            block *= keep
             block += values[:, :_W]
             frames[rows, SPAN] = block
-            quiet = self._quiet
-            quiet[rows] = values[:, _QUIET]
+            self._quiet[rows] = 1.0 - presence
         self._last_step = (rows, index)
         if t_s > self._all_live[1]:  # some utterance has ended: drop it
             finished = np.flatnonzero(self._live_to < t_s)
@@ -306,11 +305,9 @@ class SpeechBatch:
         return self._quiet
 
 
-def _silent_pools(n_rows: int) -> tuple[np.ndarray, np.ndarray]:
-    """Pools of ``n_rows`` rows (step columns; viseme weights) whose row 0 is silence."""
-    pool = np.zeros((n_rows, _STEP_COLUMNS))
-    pool[0] = _SILENT
-    return pool, np.zeros((n_rows, _N_VISEMES))
+def _empty_pools(n_rows: int) -> tuple[np.ndarray, np.ndarray]:
+    """Pools of ``n_rows`` rows (speech values and presence, float32; viseme weights); row 0 is silence (zeros)."""
+    return np.zeros((n_rows, _POOL_COLUMNS), np.float32), np.zeros((n_rows, _N_VISEMES))
 
 
 def _cover(t_s: float, start_s: float, end_s: float) -> float:
