@@ -1,9 +1,9 @@
 """The speech layer of the character engine: n rows, each saying at most one utterance, stepped in one pass.
 
 :class:`SpeechBatch` is what :class:`mien.character.CharacterBatch` holds as ``speech``. Each utterance is
-compiled once (:func:`speech_frames`) into rows of a shared pool; a step gathers every speaking row's two
-neighbouring frames from the pool and interpolates them with a few vectorised numpy operations, whatever the
-number of rows, then applies :func:`~mien.speech.arbitration.arbitrate`.
+compiled once (:func:`speech_frames`, at :data:`ENGINE_FPS`) into rows of a shared pool; a step gathers every
+speaking row's nearest frame from the pool and applies the rule of :func:`~mien.speech.arbitration.arbitrate` in
+place, with a handful of vectorised numpy operations whatever the number of rows.
 """
 
 from __future__ import annotations
@@ -79,10 +79,11 @@ def speech_frames(utterance: Utterance) -> np.ndarray:
 class SpeechBatch:
     """The speech state of n character rows (see the module docstring).
 
-    Each utterance is compiled once (:func:`speech_frames`, cached per utterance) into a shared pool: one row
-    per track frame holding the step columns and their slope to the next frame (so a step interpolates with
-    one gather, one multiply and one add), and a parallel pool of viseme weights read only when
-    :attr:`viseme_weights` is. Pool row 0 is silence: when half the rows or more speak, every row takes part
+    Each utterance is compiled once (:func:`speech_frames`, cached per utterance, shared by every row that says
+    it) into a pool: one float32 row of 64 bytes per frame at :data:`ENGINE_FPS` (the speech values over
+    :data:`~mien.speech.arbitration.SPAN` and the presence), and a parallel pool of viseme weights read only
+    when :attr:`viseme_weights` is. An utterance's first and last frames are silence, so a row before its start
+    or after its end only clamps. Pool row 0 is silence: when half the rows or more speak, every row takes part
     in the pass (the silent ones read row 0) and the rule is applied in place on ``frames[:, SPAN]``.
     """
 
