@@ -35,10 +35,12 @@ _N_VISEMES = len(VISEMES)
 _STEP_COLUMNS = 2 * _W + 1
 """What a step reads: speech values and keep fractions over SPAN, and the presence."""
 _COLUMNS = _STEP_COLUMNS + _N_VISEMES
-_POOL_COLUMNS = -(-(_W + 1) // 16) * 16
-"""A pool row: the speech values over SPAN and the presence, float32, padded to 64 bytes (one cache line: a
-step gathers one line per row wherever each row is in its utterance)."""
-_PRESENCE = _W
+_POOL_COLUMNS = -(-_STEP_COLUMNS // 16) * 16
+"""A pool row: the speech values and keep fractions over SPAN and the quiet (1 - presence), float32, padded to
+a whole number of 64-byte cache lines."""
+_SILENT = np.zeros(_POOL_COLUMNS, np.float32)
+_SILENT[_W : 2 * _W + 1] = 1.0
+"""A pool row of silence: nothing added, everything kept, quiet."""
 """A pool row: the step columns, their slope to the next frame, the viseme weights."""
 _N_FACE = viseme_aus().shape[1]
 _IN_SPAN = SPEECH_CHANNELS - SPAN.start
@@ -80,8 +82,8 @@ class SpeechBatch:
     """The speech state of n character rows (see the module docstring).
 
     Each utterance is compiled once (:func:`speech_frames`, cached per utterance, shared by every row that says
-    it) into a pool: one float32 row of 64 bytes per frame at :data:`ENGINE_FPS` (the speech values over
-    :data:`~mien.speech.arbitration.SPAN` and the presence), and a parallel pool of viseme weights read only
+    it) into a pool: one float32 row per frame at :data:`ENGINE_FPS` (the speech values and keep fractions over
+    :data:`~mien.speech.arbitration.SPAN` and the quiet), and a parallel pool of viseme weights read only
     when :attr:`viseme_weights` is. An utterance's first and last frames are silence, so a row before its start
     or after its end only clamps. Pool row 0 is silence: when half the rows or more speak, every row takes part
     in the pass (the silent ones read row 0) and the rule is applied in place on ``frames[:, SPAN]``.
@@ -216,8 +218,7 @@ class SpeechBatch:
             self._pool, self._pool_visemes, self._used = pool, visemes, used
             self._rows = np.zeros(0, np.intp)  # offsets moved: the next _refresh rebuilds every cache
         offset = self._used
-        self._pool[offset : offset + need, :_W] = frames[:, :_W]
-        self._pool[offset : offset + need, _PRESENCE] = 1.0 - frames[:, _QUIET]
+        self._pool[offset : offset + need, :_STEP_COLUMNS] = frames[:, :_STEP_COLUMNS]
         self._pool_visemes[offset : offset + need] = frames[:, _STEP_COLUMNS:]
         self._used += need
         return offset
@@ -284,20 +285,24 @@ class SpeechBatch:
                     continue
                 hold = 1.0 - max(_cover(t_s, laugh.start_s, laugh.end_s) for laugh in active)
                 if hold < 1.0:
-                    values[i] *= hold  # the speech values and the presence are linear in the viseme weights
-        presence = values[:, _PRESENCE]
-        keep = keep_fraction(presence)  # the rule: face * keep + speech over SPAN (arbitrate's, in place)
+                    # every column is affine in the presence and equals _SILENT at 0: scaling the presence by
+                    # hold is _SILENT + hold * (values - _SILENT), for the speech, the keep and the quiet alike
+                    held = values[i]
+                    held -= _SILENT
+                    held *= hold
+                    held += _SILENT
+        keep = values[:, _W : 2 * _W]  # the rule, compiled: face * keep + speech over SPAN (arbitrate's, in place)
         if self._every_row and frames.shape[0] == rows.size:
             block = frames[:, SPAN]  # a view: the rule applied in place
             block *= keep
             block += values[:, :_W]
-            self._quiet = 1.0 - presence
+            self._quiet = values[:, _QUIET]
         else:
             block = frames[rows, SPAN]
             block *= keep
             block += values[:, :_W]
             frames[rows, SPAN] = block
-            self._quiet[rows] = 1.0 - presence
+            self._quiet[rows] = values[:, _QUIET]
         self._last_step = (rows, index)
         if t_s > self._all_live[1]:  # some utterance has ended: drop it
             finished = np.flatnonzero(self._live_to < t_s)
@@ -307,8 +312,10 @@ class SpeechBatch:
 
 
 def _empty_pools(n_rows: int) -> tuple[np.ndarray, np.ndarray]:
-    """Pools of ``n_rows`` rows (speech values and presence, float32; viseme weights); row 0 is silence (zeros)."""
-    return np.zeros((n_rows, _POOL_COLUMNS), np.float32), np.zeros((n_rows, _N_VISEMES))
+    """Pools of ``n_rows`` rows (step columns, float32; viseme weights) whose row 0 is silence."""
+    pool = np.zeros((n_rows, _POOL_COLUMNS), np.float32)
+    pool[0] = _SILENT
+    return pool, np.zeros((n_rows, _N_VISEMES))
 
 
 def _cover(t_s: float, start_s: float, end_s: float) -> float:
