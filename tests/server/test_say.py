@@ -198,3 +198,34 @@ def test_say_over_the_websocket_goes_to_the_watched_character(live) -> None:
     assert speech["character"] == "b" and speech["text"] == "hello there"
     assert httpx.get(f"{live.base_url}{speech['url']}").status_code == 200
     assert httpx.get(f"{live.base_url}/api/health").json()["ws_commands_accepted"] >= 1
+
+
+@pytest.mark.parametrize(
+    ("data", "reason"),
+    [
+        ({"say": 3}, "wrong_type"),
+        ({"say": None}, "wrong_type"),
+        ({"say": {"text": "hi", "voice": "x"}}, "unknown_field"),
+        ({"say": {"language": "en"}}, "wrong_type"),  # no text
+        ({"say": "   "}, "out_of_range"),
+        ({"say": "x" * (MAX_SAY_CHARS + 1)}, "too_long"),
+        ({"say": {"text": "hi", "language": "en us"}}, "unknown_language"),
+        ({"say": {"text": "hi", "rate_wpm": True}}, "out_of_range"),
+        ({"say": {"text": "hi", "rate_wpm": 175.5}}, "out_of_range"),
+    ],
+)
+def test_the_parser_refuses_bad_says_by_reason(data: dict, reason: str) -> None:
+    from mien.server.protocol import MessageRejected, parse_message
+
+    with pytest.raises(MessageRejected) as caught:
+        parse_message(json.dumps(data).encode(), max_bytes=8192)
+    assert caught.value.reason.value == reason
+
+
+def test_the_parser_reads_both_forms_of_say() -> None:
+    from mien.server.protocol import SayRequest, parse_message
+
+    plain = parse_message(b'{"say": "hello", "character": "b"}')
+    assert plain.say == SayRequest("hello") and plain.character == "b" and plain.has_events and plain.aus is None
+    full = parse_message(b'{"say": {"text": "hallo", "language": "de", "rate_wpm": 140}, "emotion": "joy"}')
+    assert full.say == SayRequest("hallo", "de", 140) and full.emotion == "joy"
