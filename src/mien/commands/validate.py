@@ -231,7 +231,10 @@ def run_emotions(args: argparse.Namespace) -> int:
     _check_heads(heads)
     result = emotions_result(args, heads)
     written = write_recognition(result, args.out)
-    print(f"recognised (top label; blends: top two) over {len(result.scores)} renders, and the FACS reading:")
+    print(
+        f"recognised (the averaged judge's top label; blends: one of its components) over {len(result.scores)} renders,"
+        " the spread across crops, and the FACS reading:"
+    )
     without_quality = 0
     for name in ("neutral", *EXPRESSIONS):
         if not result.subset(expression=name):
@@ -240,11 +243,13 @@ def run_emotions(args: argparse.Namespace) -> int:
         quality = result.quality(name)  # nan for a blend: no target label
         without_quality += not math.isfinite(quality)
         shown = f"{quality:.2f}" if math.isfinite(quality) else " n/a"
-        print(f"  {name:13s} {result.rate(expression=name):6.0%}   quality {shown}{facs}")
+        low, high = result.spread(expression=name)
+        spread = f" (crops {_percent(low)}-{_percent(high)})" if math.isfinite(low) else ""
+        print(f"  {name:13s} {result.rate(expression=name):6.0%}{spread}   quality {shown}{facs}")
     if without_quality:
         print(
-            "  quality n/a: none of the classifier's 7 labels is a blend (a blend is recognised when its two"
-            " emotions' labels are the top two)"
+            "  quality n/a: none of the classifier's 7 labels is a blend (a blend is recognised when its top label"
+            " is one of its two emotions')"
         )
     frontal = result.rate(expression=BASICS, view=FRONTAL)
     print(f"{', '.join(BASICS)}, frontal: {_percent(frontal)}")
