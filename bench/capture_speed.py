@@ -23,11 +23,10 @@ from __future__ import annotations
 
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from tracking import _shared, load, long_video, spread  # bench/tracking.py, beside this file
+from tracking import Timed, _shared, load, long_video, spread, timed  # bench/tracking.py, beside this file
 
 
 def main() -> int:
@@ -38,64 +37,63 @@ def main() -> int:
 
 
 def _bench(video: Path, repeats: int) -> int:
-    from mien.capture import capture_track
+    from mien.capture import Capture, capture_track
     from mien.paths import asset_path
     from mien.tracking.parallel import default_workers
-    from mien.tracking.track import track_video
+    from mien.tracking.track import Track, track_video
     from mien.tracking.video import probe
 
     model = asset_path("face_landmarker") or _shared() / "models" / "face_landmarker.task"
     info = probe(video)
     print(load())
 
-    def tracking(workers: int | None) -> object:
+    def tracking(workers: int | None) -> Track:
         return track_video(video, model, use_cache=False, show_progress=False, workers=workers)
 
     capture_track(tracking(1))  # warm-up: file cache, model load, XNNPACK, scipy
-    seq_s: list[float] = []
-    par_s: list[float] = []
-    capture_s: list[float] = []
-    solve_s: list[float] = []
-    n_frames = 0
-    for _ in range(repeats):
-        start = time.perf_counter()
-        tracking(1)
-        seq_s.append(time.perf_counter() - start)
-        start = time.perf_counter()
-        track = tracking(None)
-        par_s.append(time.perf_counter() - start)
-        start = time.perf_counter()
-        capture = capture_track(tracking(None))  # = capture_video(video, use_cache=False)
-        capture_s.append(time.perf_counter() - start)
-        start = time.perf_counter()
-        capture_track(track)
-        solve_s.append(time.perf_counter() - start)
-        n_frames = capture.n_frames
-    duration_s = n_frames / info.fps
     workers = default_workers(info.n_frames)
+    seq: list[Timed] = []
+    par: list[Timed] = []
+    cap: list[Timed] = []
+    solve: list[Timed] = []
+    tracks: list[Track] = []
+    captures: list[Capture] = []
+    for _ in range(repeats):
+        seq.append(timed(lambda: tracking(1)))
+        par.append(timed(lambda: tracks.append(tracking(None))))
+        cap.append(timed(lambda: captures.append(capture_track(tracking(None)))))  # = capture_video(video, ...)
+        solve.append(timed(lambda: capture_track(tracks[-1])))
+    n_frames = captures[-1].n_frames
+    duration_s = n_frames / info.fps
     print(
         f"video: {video.name}, {n_frames} frames, {info.width}x{info.height} at {info.fps:g} fps ({duration_s:.2f} s)"
     )
     print(f"{repeats} interleaved rounds after a warm-up, cache disabled, default workers here: {workers}")
-    print(f"  baseline tracking alone, sequential (workers=1) : {spread(seq_s, 1000, ' ms')}")
-    print(f"  tracking alone, parallel (workers={workers})          : {spread(par_s, 1000, ' ms')}")
-    print(f"  capture_video (parallel tracking + solve + filter): {spread(capture_s, 1000, ' ms')}")
-    print(f"  solve + filter alone (capture_track)            : {spread(solve_s, 1000, ' ms')}")
-    print(f"  solve + filter per frame                        : {spread([s / n_frames for s in solve_s], 1e6, ' us')}")
-    for label, values in (
-        ("sequential tracking", seq_s),
-        ("parallel tracking  ", par_s),
-        ("capture_video      ", capture_s),
-    ):
-        print(f"  {label} vs real time          : {spread([duration_s / s for s in values], 1, 'x')}")
-    ratio = [p / s for p, s in zip(par_s, seq_s, strict=True)]
-    print(f"  parallel / sequential tracking (same round)     : {spread(ratio, 1, '')}")
-    whole = [c / t - 1.0 for c, t in zip(capture_s, par_s, strict=True)]
-    print(f"  capture_video / parallel tracking - 1 (runs)    : {spread(whole, 100, ' %')}  (target <= 10%)")
-    share = [s / t for s, t in zip(solve_s, seq_s, strict=True)]
-    print(f"  solve + filter / sequential tracking (round)    : {spread(share, 100, ' %')}  (target <= 10%)")
-    share = [s / t for s, t in zip(solve_s, par_s, strict=True)]
-    print(f"  solve + filter / parallel tracking (round)      : {spread(share, 100, ' %')}  (target <= 10%)")
+    print("wall: wall-clock time; busiest CPU: CPU seconds of the busiest process (~ its length on an idle machine)")
+    rows = (
+        ("baseline tracking alone, sequential (workers=1)", seq, 1),
+        (f"tracking alone, parallel (workers={workers})         ", par, workers),
+        ("capture_video (parallel tracking + solve+filter)", cap, workers),
+        ("solve + filter alone (capture_track)            ", solve, 1),
+    )
+    for label, runs, w in rows:
+        print(f"  {label}: wall {spread([r.wall_s for r in runs], 1000, ' ms')}")
+        print(f"  {' ' * len(label)}  busiest CPU {spread([r.busiest_cpu_s(w) for r in runs], 1000, ' ms')}")
+    print(f"  solve + filter per frame: {spread([r.wall_s / n_frames for r in solve], 1e6, ' us')}")
+    short = ("sequential tracking", "parallel tracking  ", "capture_video      ")
+    for label, (_, runs, w) in zip(short, rows, strict=False):
+        wall = spread([duration_s / r.wall_s for r in runs], 1, "x")
+        idle = spread([duration_s / r.busiest_cpu_s(w) for r in runs], 1, "x")
+        print(f"  {label} vs real time: wall {wall}")
+        print(f"  {' ' * len(label)}   idle (busiest CPU) {idle}  (target >= 4x)")
+    ratio = spread([p.wall_s / s.wall_s for p, s in zip(par, seq, strict=True)], 1, "")
+    busy = spread([p.busiest_cpu_s(workers) / s.busiest_cpu_s(1) for p, s in zip(par, seq, strict=True)], 1, "")
+    print(f"  parallel / sequential tracking (same round): wall {ratio}; busiest CPU {busy}")
+    whole = spread([c.wall_s / t.wall_s - 1.0 for c, t in zip(cap, par, strict=True)], 100, " %")
+    print(f"  capture_video / parallel tracking - 1 (whole runs, wall): {whole}  (target <= 10%)")
+    for name, base in (("sequential", seq), ("parallel", par)):
+        share = spread([s.wall_s / t.wall_s for s, t in zip(solve, base, strict=True)], 100, " %")
+        print(f"  solve + filter / {name} tracking (same round, wall): {share}  (target <= 10%)")
     print(load())
     return 0
 

@@ -23,13 +23,14 @@ import queue
 import signal
 from collections.abc import Iterable, Iterator
 from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from mien.errors import InvalidValueError
+from mien.errors import InvalidValueError, MienError
 from mien.facs.arkit import ARKIT_NAMES
 from mien.progress import progress
 from mien.tracking.landmarker import N_LANDMARKS
@@ -282,7 +283,10 @@ def _track_parallel(
         assert own.result is not None
         parts.append(own.result)
         for future in futures:
-            part = future.result()
+            try:
+                part = future.result()
+            except BrokenProcessPool as exc:  # a worker killed from outside (out of memory, a kill)
+                raise MienError(f"a tracking worker process stopped ({exc}); track with workers=1") from None
             if isinstance(part, _Failure):
                 raise InvalidValueError(part.field, part.value, part.expected)
             parts.append(part)
