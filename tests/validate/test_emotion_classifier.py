@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from mien.errors import UnknownNameError
-from mien.validate.emotion_classifier import FRAMINGS, face_box
+from mien.validate.emotion_classifier import FRAMINGS, EmotionClassifier, face_box
 
 
 def _builtin_landmarks(view: str = "frontal-1m", size: int = 512) -> np.ndarray:
@@ -78,3 +78,17 @@ def test_both_framings_read_a_real_faces_neutral_and_smile(
     else:
         assert eyes < 0.30
     assert (framing in detector.name) == (framing != "landmarks")
+
+
+def test_the_judge_batches_crops_as_one_at_a_time(emotion_model_path: Path) -> None:
+    """The averaged judge sends its twelve crops in one call: the same probabilities as one crop at a time, whatever
+    the batch size before."""
+    classifier = EmotionClassifier(emotion_model_path)
+    crops = np.random.default_rng(0).random((12, 64, 64)).astype(np.float32)
+    batch = classifier.classify_crops(crops)
+    assert batch.shape == (12, 7)
+    np.testing.assert_allclose(batch.sum(axis=1), 1.0, atol=1e-5)
+    for crop, row in zip(crops[:3], batch[:3], strict=True):
+        np.testing.assert_allclose(classifier.classify_crop(crop), row, atol=1e-6)
+    np.testing.assert_allclose(classifier.classify_crops(crops[5:7]), batch[5:7], atol=1e-6)
+    assert classifier.classify_crops(np.zeros((0, 64, 64))).shape == (0, 7)
