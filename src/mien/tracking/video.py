@@ -263,6 +263,7 @@ def iter_segment(
 
     file = _check_file(path)
     container, stream = _open_av(file)
+    stream.codec_context.thread_count = 1  # every core tracks a segment: FFmpeg's threads would cost CPU, not time
     rate = float(stream.average_rate or stream.guessed_rate or 30)
     index = segment.first_frame
     previous: float | None = None
