@@ -9,8 +9,9 @@ The one interface is :class:`~mien.validate.detector.Detector` (an RGB frame in,
   people's quality), views from :data:`mien.render.camera.VIEWS`;
 * evidence: :mod:`~mien.validate.detector`, :mod:`~mien.validate.face_detector`,
   :mod:`~mien.validate.emotion_classifier`, :mod:`~mien.validate.landmark_aus`,
-  :mod:`~mien.validate.facs_reading`, :mod:`~mien.validate.human_evidence`;
-* results: :mod:`~mien.validate.scores` (recognition), :mod:`~mien.validate.targets` (the scorecard);
+  :mod:`~mien.validate.facs_reading`, :mod:`~mien.validate.human_evidence`, :mod:`~mien.validate.judge` (what a
+  verdict is: the classifier's probabilities averaged over twelve crops);
+* results: :mod:`~mien.validate.scores` (recognition), :mod:`~mien.validate.targets` (the scorecard, per kind of head);
 * runs that render and judge: :mod:`~mien.validate.stimuli`, :mod:`~mien.validate.recognition`,
   :mod:`~mien.validate.rig_fidelity`, :mod:`~mien.validate.compare`;
 * output: :mod:`~mien.validate.figures`, :mod:`~mien.validate.report`, taking a
