@@ -603,6 +603,9 @@ class Character:
         """The one-row batch that does the work."""
         self.last_feature_weights: np.ndarray | None = None
         """(n_frames, 54) feature weights of the last :meth:`run` (``"feature_points"`` basis only)."""
+        self.last_viseme_weights: np.ndarray | None = None
+        """(n_frames, 15) the speech layer's viseme weights of the last :meth:`run` (None if it said nothing):
+        ``face_to_rig(rig, clip, visemes=...)`` shows them through a head's own viseme shapes."""
 
     @property
     def time_s(self) -> float:
@@ -704,11 +707,16 @@ class Character:
         start = self.time_s
         values = np.empty((n_frames, _N))
         features = np.empty((n_frames, _N_FEATURES)) if self.expression_basis != "facs" else None
+        speech = self.batch.speech
+        visemes = np.zeros((n_frames, speech.viseme_weights.shape[1])) if speech.utterance(0) else None
         for i in range(n_frames):
             values[i] = self.step(start + i / fps)
             if features is not None:
                 features[i] = self.feature_weights
+            if visemes is not None:
+                visemes[i] = speech.viseme_weights[0]
         self.last_feature_weights = features
+        self.last_viseme_weights = visemes
         return Clip(values, fps, FACE_CHANNELS)
 
     def snapshot(self) -> dict[str, Any]:

@@ -116,7 +116,7 @@ def run(args: argparse.Namespace) -> int:
     if spoken_clip:
         return export_spoken(args, clip, utterance)
     rig, camera, size = scene_from_args(args)
-    weights, poses = face_to_rig(rig, clip, character.last_feature_weights)
+    weights, poses = face_to_rig(rig, clip, character.last_feature_weights, visemes=character.last_viseme_weights)
     out.parent.mkdir(parents=True, exist_ok=True)
     if utterance.audio is None:
         render_clip(rig, weights, out, clip.fps, camera, size, poses, progress=not args.quiet)

@@ -18,6 +18,7 @@ def face_to_rig(
     frames: Clip | np.ndarray,
     feature_weights: np.ndarray | None = None,
     mapping_path: str | None = None,
+    visemes: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """``(weights (n, n_targets) float32, poses (n, 5) float64)`` for ``rig`` from (n, 62) face frames.
 
@@ -25,7 +26,9 @@ def face_to_rig(
 
     Weights come from the AU -> ARKit mapping (the shipped table, or the user table at ``mapping_path``);
     ``feature_weights`` (n, 54) metres, from a character with the ``"feature_points"`` basis, drive the
-    rig's ``fp_*`` targets when it has them. Poses are head yaw/pitch/roll and gaze yaw/pitch in degrees.
+    rig's ``fp_*`` targets when it has them; ``visemes`` (n, 15), the speech layer's viseme weights of the same
+    frames (:attr:`mien.character.Character.last_viseme_weights`), drive the rig's own viseme targets when it has
+    them (see :meth:`RigDriver.weights`). Poses are head yaw/pitch/roll and gaze yaw/pitch in degrees.
     One implementation with live streaming: this is :class:`mien.rig.driver.RigDriver` compiled for the call
     (keep a driver to map frames tick by tick).
     """
@@ -41,4 +44,4 @@ def face_to_rig(
     if values.ndim != 2 or values.shape[1] != len(FACE_CHANNELS):
         raise InvalidValueError("frames", values.shape, f"(n_frames, {len(FACE_CHANNELS)})")
     driver = RigDriver(rig, mapping_path)
-    return driver.weights(values, feature_weights), driver.pose(values)
+    return driver.weights(values, feature_weights, visemes=visemes), driver.pose(values)

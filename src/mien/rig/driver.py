@@ -4,7 +4,9 @@
 the rig's targets) into one float32 matrix. A tick is a product in row chunks that BLAS keeps on the calling
 thread (:func:`mien.small_matmul.matmul_rows`: a busy machine's threads cannot slow it down) and a clip, into
 buffers kept between calls (nothing allocated once the batch size is stable). :func:`mien.rig.animate.face_to_rig`
-uses it, so offline rendering and live streaming share one implementation.
+uses it, so offline rendering and live streaming share one implementation. A head with its own viseme shapes
+(:func:`mien.speech.visemes.rig_viseme_targets`, e.g. the VALID avatars' ``h_expressions.*``) shows speech through
+them when a tick passes the speech layer's viseme weights (``visemes``): the AU route keeps the rest of the face.
 
 >>> import numpy as np
 >>> from mien.facs.catalogue import FACE_CHANNELS, au_channels
@@ -30,6 +32,8 @@ from mien.rig.fp_correctives import Corrective, corrective_matrix, correctives, 
 from mien.rig.mapping import AUMapping
 from mien.rig.model import Rig
 from mien.small_matmul import matmul_rows
+from mien.speech.arbitration import SPEECH_CHANNELS
+from mien.speech.visemes import VISEMES, rig_viseme_targets, viseme_aus
 
 __all__ = ["POSE_COLUMNS", "RigDriver"]
 
@@ -38,6 +42,7 @@ POSE_COLUMNS: tuple[str, ...] = POSE_CHANNELS
 
 _N = len(FACE_CHANNELS)
 _POSE = np.array([FACE_CHANNELS.index(name) for name in POSE_CHANNELS], np.intp)
+_N_VISEMES = len(VISEMES)
 
 
 class RigDriver:
@@ -73,6 +78,17 @@ class RigDriver:
         self._corrective_matrix = corrective_matrix(self._correctives)
         self._frames32 = np.zeros((0, _N), np.float32)
 
+        self.viseme_targets: dict[str, str] = rig_viseme_targets(names)
+        """``{viseme: target}``: the rig's own viseme shapes (empty: speech goes through the AU mapping alone)."""
+        own = [VISEMES.index(viseme) for viseme in self.viseme_targets]
+        self._own_visemes = np.array(own, np.intp)
+        # the speech channels' share of those visemes, which their own targets show instead of the AU route
+        shapes = np.zeros((len(own), _N), np.float32)
+        shapes[:, SPEECH_CHANNELS] = viseme_aus()[np.ix_(self._own_visemes, SPEECH_CHANNELS)]
+        self._own_shapes = shapes
+        self._own_targets = np.zeros((len(own), self.n_targets), np.float32)  # viseme -> target (two may share)
+        self._own_targets[np.arange(len(own)), [names.index(t) for t in self.viseme_targets.values()]] = 1.0
+
     @property
     def n_targets(self) -> int:
         """Number of weight columns."""
@@ -90,7 +106,11 @@ class RigDriver:
         return values
 
     def weights(
-        self, frames: np.ndarray, feature_weights: np.ndarray | None = None, out: np.ndarray | None = None
+        self,
+        frames: np.ndarray,
+        feature_weights: np.ndarray | None = None,
+        out: np.ndarray | None = None,
+        visemes: np.ndarray | None = None,
     ) -> np.ndarray:
         """(n, n_targets) float32 weights in [0, 1] for (n, 62) face frames (pose channels ignored).
 
@@ -100,6 +120,12 @@ class RigDriver:
         softly limited to the room this rig has (:func:`mien.rig.feature_points.limit_moves`), and drive the rig's
         skin-detail correctives ``fpc_*`` (:func:`mien.rig.fp_correctives.drive_correctives`). ``out``: a C-contiguous
         (n, n_targets) float32 array to fill (nothing is allocated then, once the batch size is stable).
+        ``visemes`` (n, 15): the speech layer's viseme weights of these frames
+        (:attr:`mien.speech.batch.SpeechBatch.viseme_weights`, :attr:`mien.character.Character.last_viseme_weights`);
+        on a rig with its own viseme targets (:attr:`viseme_targets`) each viseme it has drives its target by its
+        weight and its AU shape is taken out of the speech channels (the speech-owned lips and jaw, and the spread
+        speech adds to AU20: :mod:`mien.speech.arbitration`), so the AU route keeps the emotion's share there, the
+        visemes the rig lacks and every other channel. Ignored on a rig without viseme targets.
         """
         values = self._check_frames(frames)
         n = values.shape[0]
@@ -112,7 +138,19 @@ class RigDriver:
         if self._frames32.shape[0] != n:
             self._frames32 = np.empty((n, _N), np.float32)
         np.copyto(self._frames32, values, casting="same_kind")
+        own = None
+        if visemes is not None and self._own_visemes.size:
+            spoken = np.asarray(visemes, dtype=np.float32)
+            if spoken.shape != (n, _N_VISEMES):
+                raise InvalidValueError(
+                    "visemes", f"array of shape {spoken.shape}", f"({n}, {_N_VISEMES}) viseme weights"
+                )
+            own = spoken[:, self._own_visemes]
+            self._frames32 -= own @ self._own_shapes  # the AU route's share of the visemes the rig shows itself
+            np.maximum(self._frames32, 0.0, out=self._frames32)
         matmul_rows(self._frames32, self._matrix, out)  # pose rows of the matrix are zero
+        if own is not None:
+            out += own @ self._own_targets
         np.clip(out, 0.0, 1.0, out=out)
         if feature_weights is not None:
             if self._feature_columns is None:

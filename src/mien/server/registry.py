@@ -482,7 +482,11 @@ class Registry:
         features = None
         if entry.spec.expression_basis == "feature_points":
             features = self.batch.feature_weights[entry.row : entry.row + 1]
-        return entry.driver.weights(frames, feature_weights=features)[0], entry.driver.pose(frames)[0]
+        visemes = None  # a head with its own viseme shapes speaks through them
+        if entry.driver.viseme_targets and self.batch.speech.utterance(entry.row) is not None:
+            visemes = self.batch.speech.viseme_weights[entry.row : entry.row + 1]
+        weights = entry.driver.weights(frames, feature_weights=features, visemes=visemes)[0]
+        return weights, entry.driver.pose(frames)[0]
 
     def frame_output(self, entry: Entry) -> tuple[np.ndarray, np.ndarray]:
         """``(weights (n_frame_names,) float32, pose (5,) degrees)`` of ``entry`` at the last step as its frames

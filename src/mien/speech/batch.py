@@ -104,7 +104,7 @@ class SpeechBatch:
         self._live_from = np.full(n, -math.inf)
         self._live_to = np.full(n, math.inf)
         self._visemes = np.zeros((n, _N_VISEMES))
-        self._last_step: tuple[np.ndarray, np.ndarray] | None = None
+        self._last_step: tuple[np.ndarray, np.ndarray, list[tuple[int, float]]] | None = None
         self._visemes_read = False
         self._every_row = False
         self._rows = np.zeros(0, np.intp)
@@ -122,12 +122,15 @@ class SpeechBatch:
     @property
     def viseme_weights(self) -> np.ndarray:
         """(n, 15) viseme weights of the last step (``sil`` column 0; zeros where a row is silent): for heads
-        with their own viseme shapes (:func:`~mien.speech.visemes.rig_viseme_targets`). Built when read."""
+        with their own viseme shapes (:func:`~mien.speech.visemes.rig_viseme_targets`, driven by
+        :meth:`mien.rig.driver.RigDriver.weights`); a laugh fades them as it fades the AU shapes. Built when read."""
         self._visemes_read = True
         if self._last_step is not None:
-            rows, index = self._last_step
+            rows, index, holds = self._last_step
             self._last_step = None
             weights = self._pool_visemes[index]  # the first and last frames of an utterance are silence
+            for i, hold in holds:
+                weights[i] *= hold
             self._visemes[:] = 0.0
             self._visemes[rows] = weights
         return self._visemes
@@ -278,6 +281,7 @@ class SpeechBatch:
             np.minimum(np.maximum(position, first, out=position), first + self._rows_last, out=position)
         index = position.astype(np.int64)  # floor: position >= 0
         values = self._pool[index]
+        holds: list[tuple[int, float]] = []
         if laughs:
             for row, active in laughs.items():
                 i = self._position(row)
@@ -285,6 +289,7 @@ class SpeechBatch:
                     continue
                 hold = 1.0 - max(_cover(t_s, laugh.start_s, laugh.end_s) for laugh in active)
                 if hold < 1.0:
+                    holds.append((i, hold))
                     # every column is affine in the presence and equals _SILENT at 0: scaling the presence by
                     # hold is _SILENT + hold * (values - _SILENT), for the speech, the keep and the quiet alike
                     held = values[i]
@@ -303,7 +308,7 @@ class SpeechBatch:
             block += values[:, :_W]
             frames[rows, SPAN] = block
             self._quiet[rows] = values[:, _QUIET]
-        self._last_step = (rows, index)
+        self._last_step = (rows, index, holds)
         if t_s > self._all_live[1]:  # some utterance has ended: drop it
             finished = np.flatnonzero(self._live_to < t_s)
             if finished.size:
