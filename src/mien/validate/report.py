@@ -148,9 +148,10 @@ def _emotions_section(result: RecognitionResult, folder: Path) -> str:
 
 
 _VERDICT = (
-    "A verdict is the classifier's probabilities averaged over twelve readings of the same face: rendered at two "
-    "sizes, each read under six crops (the landmark framing, brows to chin, and the fer package's framing, forehead "
-    "to chin, each at its place and jittered 4% in position and 6% in scale; mien.validate.judge)."
+    "A verdict is the classifier's probabilities averaged over twelve readings of the same face: the render and the "
+    "render reduced to three quarters of its size, each read under six crops (the landmark framing, brows to chin, "
+    "and the fer package's framing, forehead to chin, each at its place and jittered 4% in position and 6% in "
+    "scale; mien.validate.judge)."
 )
 
 
