@@ -38,3 +38,19 @@ def test_track_command_errors(tmp_path: Path, landmarker_path: Path, capsys: pyt
     assert "broken.webm" in capsys.readouterr().err
     assert main(["track", str(bad), "-o", str(tmp_path / "out.txt")]) == 2
     assert "out.txt" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_track_command_workers(shared_data: Path, landmarker_path: Path, tmp_path: Path) -> None:
+    """--workers 2 on no_face.mp4 (an edit list drops its first packets): the same frames and times as one
+    process, no face on any."""
+    video = shared_data / "video" / "no_face.mp4"
+    outputs = []
+    for workers in ("1", "2"):
+        out = tmp_path / f"track_{workers}.npz"
+        args = ["track", str(video), "--landmarker", str(landmarker_path), "--no-cache", "--quiet", "-o", str(out)]
+        assert main([*args, "--workers", workers]) == 0
+        outputs.append(load_track(out))
+    one, two = outputs
+    assert two.n_frames == one.n_frames > 90 and np.array_equal(two.timestamps_s, one.timestamps_s)
+    assert not two.face_found.any() and not one.face_found.any()
