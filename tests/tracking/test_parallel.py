@@ -115,3 +115,54 @@ def test_worker_counts() -> None:
     for bad in (0, -1, 1.5, True, "2"):
         with pytest.raises(InvalidValueError, match="workers"):
             check_workers(bad)  # type: ignore[arg-type]
+
+
+def _children(pid: int) -> list[int]:
+    """Process ids whose parent is ``pid`` (from /proc)."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                if int((entry / "stat").read_text().rsplit(")", 1)[1].split()[1]) == pid:
+                    found.append(int(entry.name))
+            except (OSError, IndexError, ValueError):
+                continue
+    return found
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads the process tree from /proc")
+def test_sigterm_stops_the_workers(shared_data: Path, landmarker_path: Path) -> None:
+    """SIGTERM a second into `mien track --workers 2` (face_noface.mov: 169 frames, 960x540): exit 130
+    ("interrupted") and no worker process left."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    video = shared_data / "video" / "face_noface.mov"
+    command = [sys.executable, "-m", "mien.cli", "track", str(video), "--landmarker", str(landmarker_path)]
+    process = subprocess.Popen([*command, "--workers", "2", "--no-cache", "--quiet"], stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    children: list[int] = []
+    while not children and process.poll() is None and time.monotonic() < deadline:
+        children = _children(process.pid)
+        time.sleep(0.02)
+    assert children, "the worker processes never started"
+    time.sleep(1.0)
+    assert process.poll() is None, "tracking finished before the signal"
+    process.send_signal(signal.SIGTERM)
+    _, err = process.communicate(timeout=60)
+    assert process.returncode == 130 and "interrupted" in err
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline and any(_running(pid) for pid in children):
+        time.sleep(0.05)
+    assert not [pid for pid in children if _running(pid)]
+
+
+def _running(pid: int) -> bool:
+    """The process exists and is not a zombie (exited, waiting to be reaped)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except (OSError, IndexError):
+        return False
