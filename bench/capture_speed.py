@@ -21,6 +21,7 @@ found through $MIEN_SHARED or ../shared, and $MIEN_FACE_LANDMARKER or the shared
 
 from __future__ import annotations
 
+import statistics
 import sys
 import tempfile
 from pathlib import Path
@@ -78,7 +79,9 @@ def _bench(video: Path, repeats: int) -> int:
     )
     for label, runs, w in rows:
         print(f"  {label}: wall {spread([r.wall_s for r in runs], 1000, ' ms')}")
-        print(f"  {' ' * len(label)}  busiest CPU {spread([r.busiest_cpu_s(w) for r in runs], 1000, ' ms')}")
+        idle = statistics.median(r.idle_share for r in runs)
+        busy = spread([r.busiest_cpu_s(w) for r in runs], 1000, " ms")
+        print(f"  {' ' * len(label)}  busiest CPU {busy}  machine idle during the run {idle:.0%}")
     print(f"  solve + filter per frame: {spread([r.wall_s / n_frames for r in solve], 1e6, ' us')}")
     short = ("sequential tracking", "parallel tracking  ", "capture_video      ")
     for label, (_, runs, w) in zip(short, rows, strict=False):

@@ -50,6 +50,9 @@ class Timed:
     wall_s: float
     self_cpu_s: float
     workers_cpu_s: float
+    idle_share: float = float("nan")
+    """Share of the machine's CPU time left idle during the run (/proc/stat; NaN elsewhere): near 0, the
+    run had no spare core to use, whatever its worker count."""
 
     def busiest_cpu_s(self, workers: int) -> float:
         """CPU seconds of the busiest process (this one, or a worker on average): the run's length on an idle
@@ -57,17 +60,29 @@ class Timed:
         return max(self.self_cpu_s, self.workers_cpu_s / max(workers - 1, 1))
 
 
+def _machine_ticks() -> tuple[int, int]:
+    """(idle, total) CPU ticks of the whole machine so far (/proc/stat; (0, 0) where it does not exist)."""
+    try:
+        fields = [int(v) for v in Path("/proc/stat").read_text().split("\n", 1)[0].split()[1:]]
+    except (OSError, ValueError):
+        return 0, 0
+    return fields[3] + fields[4], sum(fields[:8])  # idle + iowait; user..steal
+
+
 def timed(work: Callable[[], object]) -> Timed:
     """Run ``work()`` and measure it (:class:`Timed`)."""
     own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    idle, total = _machine_ticks()
     start = time.perf_counter()
     work()
     wall = time.perf_counter() - start
+    idle_after, total_after = _machine_ticks()
     own_after, kids_after = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
     return Timed(
         wall,
         own_after.ru_utime + own_after.ru_stime - own.ru_utime - own.ru_stime,
         kids_after.ru_utime + kids_after.ru_stime - kids.ru_utime - kids.ru_stime,
+        (idle_after - idle) / (total_after - total) if total_after > total else float("nan"),
     )
 
 
@@ -182,7 +197,8 @@ def main() -> int:
             for label, runs, w in (("workers=1 (baseline)", seq, 1), ("workers=2           ", par, 2)):
                 wall = spread([r.wall_s for r in runs], 1000, " ms")
                 busy = spread([r.busiest_cpu_s(w) for r in runs], 1000, " ms")
-                print(f"  {s:4.1f} s video, {label}: wall {wall}  busiest CPU {busy}")
+                idle = statistics.median(r.idle_share for r in runs)
+                print(f"  {s:4.1f} s video, {label}: wall {wall}  busiest CPU {busy}  machine idle {idle:.0%}")
             ratio = spread([p.wall_s / q.wall_s for p, q in zip(par, seq, strict=True)], 1, "")
             print(f"  {s:4.1f} s video, parallel / sequential, wall       : {ratio}")
             busy = [p.busiest_cpu_s(2) / q.busiest_cpu_s(1) for p, q in zip(par, seq, strict=True)]
