@@ -317,6 +317,8 @@ class CharacterBatch:
     def _rows(self, rows: RowIndex) -> np.ndarray:
         """``rows`` as an int array of active rows, or :class:`InvalidValueError`."""
         n = self.n_characters
+        if type(rows) is int and 0 <= rows < n and self._active[rows]:  # one row (a server's say): no array work
+            return np.array([rows], np.intp)
         try:
             if isinstance(rows, slice):
                 ids = np.arange(n)[rows]

@@ -110,7 +110,7 @@ class SpeechBatch:
         self._rows = np.zeros(0, np.intp)
         self._position_of: dict[int, int] | None = {}
         self._rows_fps = self._rows_shift = np.zeros(0)
-        self._rows_base = self._rows_last = np.zeros(0, np.int64)
+        self._rows_low = self._rows_high = np.zeros(0)
         self._all_live = (0.0, -1.0)
         self._refresh()
 
@@ -198,7 +198,7 @@ class SpeechBatch:
             self._last[row] = frames.shape[0] - 1
             self.fps[row] = ENGINE_FPS
             self._live_from[row], self._live_to[row] = start, start + (frames.shape[0] - 1) / ENGINE_FPS
-        self._refresh(changed)
+        self._refresh(changed, (start, start + (frames.shape[0] - 1) / ENGINE_FPS))
 
     def _store(self, frames: np.ndarray) -> int:
         """Copy ``frames`` into the pools and return their first row (compacting or growing the pools)."""
@@ -226,16 +226,23 @@ class SpeechBatch:
         self._used += need
         return offset
 
-    def _refresh(self, changed: list[int] | None = None) -> None:
+    def _refresh(self, changed: list[int] | None = None, live: tuple[float, float] | None = None) -> None:
         """Cache the taking-part rows' arrays (in row order) for :meth:`apply`; only the ``changed`` rows when
-        every row already takes part and still does (one say or one finished utterance costs O(1))."""
+        every row already takes part and still does (one say or one finished utterance costs O(1)). ``live``: the
+        (start, end) the ``changed`` rows have just been given (a say), which narrows the all-live window."""
         n = self._quiet.shape[0]
         every_row = 0 < 2 * len(self._spans) and 2 * len(self._spans) >= n
         if changed is not None and every_row and self._every_row and self._rows.size == n:
             for row in changed:  # row i is row i: a few scalar writes
                 fps, offset = float(self.fps[row]), int(self._offset[row])
-                self._rows_fps[row], self._rows_base[row], self._rows_last[row] = fps, offset, self._last[row]
+                self._rows_fps[row], self._rows_low[row] = fps, offset
+                self._rows_high[row] = offset + int(self._last[row])
                 self._rows_shift[row] = float(self._start[row]) * fps - offset - 0.5
+            if live is not None and self._all_live[0] <= self._all_live[1]:
+                # a say only narrows the window (what the rows said before can only have widened it: keeping
+                # it is safe, as a row outside the window is merely clamped and checked for its end)
+                self._all_live = (max(self._all_live[0], live[0]), min(self._all_live[1], live[1]))
+                return
         else:
             self._every_row = every_row
             # with half the rows or more speaking, every row takes part (a silent one reads pool row 0):
@@ -244,11 +251,14 @@ class SpeechBatch:
             self._rows = rows
             self._position_of = None if every_row else {row: i for i, row in enumerate(rows.tolist())}
             self._rows_fps = self.fps[rows]
-            self._rows_base = self._offset[rows]
-            self._rows_last = self._last[rows]
+            self._rows_low = self._offset[rows].astype(np.float64)  # an utterance's first and last pool rows
+            self._rows_high = self._rows_low + self._last[rows]
             # nearest pool row at t: floor(t * fps - (start * fps - offset - 0.5)), one multiply and one subtract
-            self._rows_shift = self._start[rows] * self._rows_fps - self._rows_base - 0.5
-        # every speaking row has started and none has ended between these times (silent rows: -inf, +inf)
+            self._rows_shift = self._start[rows] * self._rows_fps - self._rows_low - 0.5
+        self._window()
+
+    def _window(self) -> None:
+        """Every speaking row has started and none has ended between these times (silent rows: -inf, +inf)."""
         self._all_live = (float(self._live_from.max()), float(self._live_to.min())) if self._spans else (0.0, -1.0)
 
     def _position(self, row: int) -> int | None:
@@ -277,10 +287,9 @@ class SpeechBatch:
         if not self._all_live[0] <= t_s <= self._all_live[1]:
             # some row has not started or has ended: it reads its first or last frame, which are silence (the
             # edge fade ends at 0), so clamping is all it takes
-            first = self._rows_base
-            np.minimum(np.maximum(position, first, out=position), first + self._rows_last, out=position)
+            np.minimum(np.maximum(position, self._rows_low, out=position), self._rows_high, out=position)
         index = position.astype(np.int64)  # floor: position >= 0
-        values = self._pool[index]
+        values = self._pool.take(index, axis=0)  # = self._pool[index], a third of the time
         holds: list[tuple[int, float]] = []
         if laughs:
             for row, active in laughs.items():
@@ -313,6 +322,8 @@ class SpeechBatch:
             finished = np.flatnonzero(self._live_to < t_s)
             if finished.size:
                 self.reset_rows(finished)
+            else:  # the window was narrower than the rows' (a say replaced an utterance): widen it
+                self._window()
         return self._quiet
 
 
