@@ -112,6 +112,8 @@ class SpeechBatch:
         self._rows_fps = self._rows_shift = np.zeros(0)
         self._rows_low = self._rows_high = np.zeros(0)
         self._all_live = (0.0, -1.0)
+        self._buffers = _step_buffers(0)
+        self._block: tuple[np.ndarray | None, np.ndarray] = (None, np.zeros((0, _W)))
         self._refresh()
 
     @property
@@ -190,15 +192,17 @@ class SpeechBatch:
         offset = stored[0] if stored is not None else self._store(frames)
         self._stored[utterance] = (offset, frames.shape[0])
         changed = np.asarray(rows).ravel().tolist()
+        last = frames.shape[0] - 1
+        end = start + last / ENGINE_FPS
         for row in changed:
             self._utterances[row] = utterance
-            self._spans[row] = (offset, frames.shape[0])
+            self._spans[row] = (offset, last + 1)
             self._start[row] = start
             self._offset[row] = offset
-            self._last[row] = frames.shape[0] - 1
+            self._last[row] = last
             self.fps[row] = ENGINE_FPS
-            self._live_from[row], self._live_to[row] = start, start + (frames.shape[0] - 1) / ENGINE_FPS
-        self._refresh(changed, (start, start + (frames.shape[0] - 1) / ENGINE_FPS))
+            self._live_from[row], self._live_to[row] = start, end
+        self._refresh(changed, (start, end), (ENGINE_FPS, offset, last, start))
 
     def _store(self, frames: np.ndarray) -> int:
         """Copy ``frames`` into the pools and return their first row (compacting or growing the pools)."""
@@ -226,18 +230,23 @@ class SpeechBatch:
         self._used += need
         return offset
 
-    def _refresh(self, changed: list[int] | None = None, live: tuple[float, float] | None = None) -> None:
+    def _refresh(
+        self,
+        changed: list[int] | None = None,
+        live: tuple[float, float] | None = None,
+        given: tuple[float, int, int, float] = (0.0, 0, 0, 0.0),
+    ) -> None:
         """Cache the taking-part rows' arrays (in row order) for :meth:`apply`; only the ``changed`` rows when
         every row already takes part and still does (one say or one finished utterance costs O(1)). ``live``: the
-        (start, end) the ``changed`` rows have just been given (a say), which narrows the all-live window."""
+        (start, end) the ``changed`` rows have just been given (a say), which narrows the all-live window;
+        ``given``: the (fps, offset, last, start) they were given (silence by default)."""
         n = self._quiet.shape[0]
         every_row = 0 < 2 * len(self._spans) and 2 * len(self._spans) >= n
         if changed is not None and every_row and self._every_row and self._rows.size == n:
+            fps, offset, last, start = given
             for row in changed:  # row i is row i: a few scalar writes
-                fps, offset = float(self.fps[row]), int(self._offset[row])
-                self._rows_fps[row], self._rows_low[row] = fps, offset
-                self._rows_high[row] = offset + int(self._last[row])
-                self._rows_shift[row] = float(self._start[row]) * fps - offset - 0.5
+                self._rows_fps[row], self._rows_low[row], self._rows_high[row] = fps, offset, offset + last
+                self._rows_shift[row] = start * fps - offset - 0.5
             if live is not None and self._all_live[0] <= self._all_live[1]:
                 # a say only narrows the window (what the rows said before can only have widened it: keeping
                 # it is safe, as a row outside the window is merely clamped and checked for its end)
@@ -283,13 +292,18 @@ class SpeechBatch:
         rows = self._rows
         if not self._spans:
             return None
-        position = t_s * self._rows_fps - self._rows_shift  # pool row + 0.5: floor is the nearest row
+        buffers = self._buffers
+        if buffers[0].shape[0] != rows.size:  # gathered into buffers kept between steps, with their views
+            buffers = self._buffers = _step_buffers(rows.size)
+        position, values, keep, speech, quiet = buffers
+        np.multiply(t_s, self._rows_fps, out=position)
+        position -= self._rows_shift  # pool row + 0.5: floor is the nearest row
         if not self._all_live[0] <= t_s <= self._all_live[1]:
             # some row has not started or has ended: it reads its first or last frame, which are silence (the
             # edge fade ends at 0), so clamping is all it takes
             np.minimum(np.maximum(position, self._rows_low, out=position), self._rows_high, out=position)
         index = position.astype(np.int64)  # floor: position >= 0
-        values = self._pool.take(index, axis=0)  # = self._pool[index], a third of the time
+        self._pool.take(index, axis=0, out=values, mode="wrap")  # = self._pool[index] (every index is in range)
         holds: list[tuple[int, float]] = []
         if laughs:
             for row, active in laughs.items():
@@ -305,18 +319,20 @@ class SpeechBatch:
                     held -= _SILENT
                     held *= hold
                     held += _SILENT
-        keep = values[:, _W : 2 * _W]  # the rule, compiled: face * keep + speech over SPAN (arbitrate's, in place)
+        # the rule, compiled: face * keep + speech over SPAN (arbitrate's, in place)
         if self._every_row and frames.shape[0] == rows.size:
-            block = frames[:, SPAN]  # a view: the rule applied in place
+            if frames is not self._block[0]:  # the engine reuses its frames: so does the view
+                self._block = (frames, frames[:, SPAN])
+            block = self._block[1]  # a view: the rule applied in place
             block *= keep
-            block += values[:, :_W]
-            self._quiet = values[:, _QUIET]
+            block += speech
+            self._quiet = quiet
         else:
             block = frames[rows, SPAN]
             block *= keep
-            block += values[:, :_W]
+            block += speech
             frames[rows, SPAN] = block
-            self._quiet[rows] = values[:, _QUIET]
+            self._quiet[rows] = quiet
         self._last_step = (rows, index, holds)
         if t_s > self._all_live[1]:  # some utterance has ended: drop it
             finished = np.flatnonzero(self._live_to < t_s)
@@ -325,6 +341,13 @@ class SpeechBatch:
             else:  # the window was narrower than the rows' (a say replaced an utterance): widen it
                 self._window()
         return self._quiet
+
+
+def _step_buffers(n_rows: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """What a step of ``n_rows`` rows writes: positions, gathered pool rows, and the latter's speech values, keep
+    fractions and quiet (views)."""
+    values = np.empty((n_rows, _POOL_COLUMNS), np.float32)
+    return np.empty(n_rows), values, values[:, _W : 2 * _W], values[:, :_W], values[:, _QUIET]
 
 
 def _empty_pools(n_rows: int) -> tuple[np.ndarray, np.ndarray]:
