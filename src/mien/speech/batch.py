@@ -110,7 +110,7 @@ class SpeechBatch:
         self._rows = np.zeros(0, np.intp)
         self._position_of: dict[int, int] | None = {}
         self._rows_fps = self._rows_shift = np.zeros(0)
-        self._rows_low = self._rows_high = np.zeros(0)
+        self._rows_low = self._rows_high = np.zeros(0, np.int64)
         self._all_live = (0.0, -1.0)
         self._buffers = _step_buffers(0)
         self._block: tuple[np.ndarray | None, np.ndarray] = (None, np.zeros((0, _W)))
@@ -260,7 +260,7 @@ class SpeechBatch:
             self._rows = rows
             self._position_of = None if every_row else {row: i for i, row in enumerate(rows.tolist())}
             self._rows_fps = self.fps[rows]
-            self._rows_low = self._offset[rows].astype(np.float64)  # an utterance's first and last pool rows
+            self._rows_low = self._offset[rows]  # an utterance's first and last pool rows
             self._rows_high = self._rows_low + self._last[rows]
             # nearest pool row at t: floor(t * fps - (start * fps - offset - 0.5)), one multiply and one subtract
             self._rows_shift = self._start[rows] * self._rows_fps - self._rows_low - 0.5
@@ -295,14 +295,14 @@ class SpeechBatch:
         buffers = self._buffers
         if buffers[0].shape[0] != rows.size:  # gathered into buffers kept between steps, with their views
             buffers = self._buffers = _step_buffers(rows.size)
-        position, values, keep, speech, quiet = buffers
+        position, index, values, keep, speech, quiet = buffers
         np.multiply(t_s, self._rows_fps, out=position)
-        position -= self._rows_shift  # pool row + 0.5: floor is the nearest row
+        # pool row + 0.5, truncated: the nearest row (floor where it is >= 0; a row before its start is clamped below)
+        np.subtract(position, self._rows_shift, out=index, casting="unsafe")
         if not self._all_live[0] <= t_s <= self._all_live[1]:
             # some row has not started or has ended: it reads its first or last frame, which are silence (the
-            # edge fade ends at 0), so clamping is all it takes
-            np.minimum(np.maximum(position, self._rows_low, out=position), self._rows_high, out=position)
-        index = position.astype(np.int64)  # floor: position >= 0
+            # edge fade ends at 0), so clamping is all it takes (on whole rows: the same as before truncating)
+            np.minimum(np.maximum(index, self._rows_low, out=index), self._rows_high, out=index)
         self._pool.take(index, axis=0, out=values, mode="wrap")  # = self._pool[index] (every index is in range)
         holds: list[tuple[int, float]] = []
         if laughs:
@@ -343,11 +343,18 @@ class SpeechBatch:
         return self._quiet
 
 
-def _step_buffers(n_rows: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """What a step of ``n_rows`` rows writes: positions, gathered pool rows, and the latter's speech values, keep
-    fractions and quiet (views)."""
+def _step_buffers(n_rows: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """What a step of ``n_rows`` rows writes: positions, pool rows, the gathered pool rows, and the latter's
+    speech values, keep fractions and quiet (views)."""
     values = np.empty((n_rows, _POOL_COLUMNS), np.float32)
-    return np.empty(n_rows), values, values[:, _W : 2 * _W], values[:, :_W], values[:, _QUIET]
+    return (
+        np.empty(n_rows),
+        np.empty(n_rows, np.int64),
+        values,
+        values[:, _W : 2 * _W],
+        values[:, :_W],
+        values[:, _QUIET],
+    )
 
 
 def _empty_pools(n_rows: int) -> tuple[np.ndarray, np.ndarray]:
