@@ -183,16 +183,16 @@ class SpeechBatch:
         start = float(start_s)
         if not math.isfinite(start):
             raise InvalidValueError("start_s", start_s, "a finite time in seconds")
-        frames = _COMPILED.get(utterance)
-        if frames is None:
-            frames = _COMPILED[utterance] = speech_frames(utterance)
         self._settle()  # the pool may move
         stored = self._stored.get(utterance)
         # an utterance already in the pool is shared (compaction keeps _stored to the spans it keeps)
-        offset = stored[0] if stored is not None else self._store(frames)
-        self._stored[utterance] = (offset, frames.shape[0])
+        if stored is None:
+            frames = _COMPILED.get(utterance)
+            if frames is None:
+                frames = _COMPILED[utterance] = speech_frames(utterance)
+            stored = self._stored[utterance] = (self._store(frames), frames.shape[0])
+        offset, last = stored[0], stored[1] - 1
         changed = np.asarray(rows).ravel().tolist()
-        last = frames.shape[0] - 1
         end = start + last / ENGINE_FPS
         for row in changed:
             self._utterances[row] = utterance
