@@ -315,6 +315,9 @@ class SpeechBatch:
                     holds.append((i, hold))
                     # every column is affine in the presence and equals _SILENT at 0: scaling the presence by
                     # hold is _SILENT + hold * (values - _SILENT), for the speech, the keep and the quiet alike
+                    if hold <= 0.0:  # inside the laugh: silence (what the three operations below give at 0)
+                        values[i] = _SILENT
+                        continue
                     held = values[i]
                     held -= _SILENT
                     held *= hold
