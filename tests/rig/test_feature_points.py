@@ -501,6 +501,7 @@ def test_driver_limits_moves_toward_barriers_only(head: tuple[Rig, FeaturePointR
         out = driver.weights(frames, raw)[:, columns]
         np.testing.assert_allclose(out, limit_moves(raw, rooms), rtol=1e-5, atol=1e-9)
         free = np.isinf(np.where(raw[0] < 0, rooms[0], rooms[1]))
+        free[[names.index(f"fp_LidUpper{side}_y") for side in ("Left", "Right")]] = False  # a lowered brow's push
         np.testing.assert_allclose(out[1, free], 2.0 * out[0, free], rtol=1e-5, atol=1e-9)
     out = driver.weights(frames, np.array([[angry[n] * s for n in names] for s in (1.2, 2.4)]))[:, columns]
     assert -rooms[0, inner_x] < out[1, inner_x] < out[0, inner_x] < -0.5 * rooms[0, inner_x]  # drawn in, short of it
@@ -512,3 +513,25 @@ def test_driver_limits_moves_toward_barriers_only(head: tuple[Rig, FeaturePointR
     happy = np.array([[table1_weights(table1("happy"), s)[n] for n in names] for s in (1.2, 2.4)])
     widened = driver.weights(frames, happy)[:, driver.target_names.index("fp_LipCornerLeft_x")]
     assert 0.0 < widened[0] < widened[1] < rooms[1, corner] < happy[1, corner]
+
+
+def test_a_lowered_brow_pushes_its_upper_lid_down(head: tuple[Rig, FeaturePointRig]) -> None:
+    """Anger lowers the inner brows, and the upper lids go down by LID_PUSHES' share of the brows' fall (Table 1
+    leaves them still); a raised brow (surprise) leaves the lids as Table 1 sets them."""
+    from mien.rig.feature_points import LID_PUSHES, feature_rooms, limit_moves
+
+    rig, _ = head
+    rooms = feature_rooms(rig)
+    names = feature_target_names()
+    share = {p: s for p, _, _, s, _ in LID_PUSHES}["BrowInner"]
+    for side in ("Left", "Right"):
+        brow, lid = names.index(f"fp_BrowInner{side}_y"), names.index(f"fp_LidUpper{side}_y")
+        angry = np.array([table1_weights(table1("angry"), 1.2)[n] for n in names])
+        assert angry[lid] == 0.0 and angry[brow] < 0.0
+        out = limit_moves(angry, rooms)
+        assert -rooms[0, lid] < out[lid] < 0.0
+        assert out[lid] == pytest.approx(-rooms[0, lid] * np.tanh(-share * out[brow] / rooms[0, lid]))
+        in_place = angry.copy()
+        np.testing.assert_array_equal(limit_moves(in_place, rooms, out=in_place), out)
+        surprise = np.array([table1_weights(table1("surprise"), 1.2)[n] for n in names])
+        assert limit_moves(surprise, rooms)[lid] == pytest.approx(surprise[lid])

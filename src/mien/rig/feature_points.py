@@ -36,7 +36,9 @@ toward the jaw line, a brow down onto its upper lid, a cheek up onto its lower l
 the upper lip up to the nostrils, the lower lip back toward the teeth, whose depth the chin's front stands for)
 becomes ``L tanh(w / L)`` with ``L = room * gap``, ``gap`` the neutral distance from the feature's landmarks
 to the barrier along that axis and ``room`` from the csv (0.5; 0.4 for the lids, so two closing lids never
-meet). Small moves stay exact (slope 1 at 0), large ones approach ``L``. Moves away from a barrier and every
+meet; a move that pushes its barrier ahead of it, :data:`LID_PUSHES`, the inner brows lowering the upper lids, gets
+``room * gap / (1 - share)``, the gap closing that much more slowly). Small moves stay exact (slope 1 at 0), large
+ones approach ``L``. Moves away from a barrier and every
 other move are exact and linear: twice the intensity, twice the move. The compiled targets themselves stay
 linear and exact at the anchor.
 
@@ -105,6 +107,21 @@ JAW_TARGET = "jawOpen"
 """The head's own target whose off-surface moves (lower teeth, tongue) the Jaw feature carries."""
 MIDLINE_LANDMARKS = (27, 28, 29, 30)
 """iBUG nose-bridge landmarks whose mean x is the facial midline."""
+LID_PUSHES: tuple[tuple[str, str, str, float, float], ...] = (("BrowInner", "LidUpper", "-y", 0.5, 0.3),)
+"""``(pusher, lid, toward, share, widen)``: a feature whose limited move heads for its lid (rig axis and sign
+``toward``) pushes that lid the same way by ``share`` of the move, on both sides (:func:`limit_moves`), and its own
+room toward the lid is ``room * gap / (1 - widen)`` (:func:`feature_rooms`: the lid goes ahead of it).
+
+Every lid margin is held by every other feature's field, so a lowered brow left the upper lid where it was: Table 1
+lowers anger's inner brows 14 mm at 1.2 and leaves the upper lids still, and ICT showed knitted brows over wide-open
+eyes, with anger's parted lips a look of surprise (frontal feature-point anger at 2.4 read surprise in 2 of 4 renders
+under the averaged judge) or of nothing (at 1.2 neutral in 3 of 4). The brow lowerer narrows the eye as it lowers
+the brow (Ekman & Friesen, FACS manual: AU4 pushes the upper lid down). Now the upper lid goes down by half the inner
+brow's limited fall (ICT a at 1.2: brow 10.8 mm, was 8.7; lid 3.0 mm, toward its room of 3.2), and ICT's frontal
+feature-point anger reads anger in 7 of 8 renders (was 3 of 8; docs/VALIDATION.md). Only a fall pushes: a raised
+brow (surprise, fear, sadness) leaves the lids as Table 1 sets them. ``widen`` 0.3, not the full share: at 0.35 the
+built-in head's left upper lid turned 1-3 triangles over in anger, frustrated and evil at 2.4. A raised cheek pushing
+its lower lid up the same way (0.3) made ICT a's joy at 1.2 read neutral more (happy 0.33 -> 0.28): not used."""
 EYE_SLIDE_M = 0.008
 """Skin within this distance of an eyeball's surface slides over it (:func:`eye_slide`)."""
 EYE_SLIDE_FULL = 0.5
@@ -276,7 +293,13 @@ def feature_rooms(rig: Rig) -> np.ndarray:
             axis = AXES.index(spec.toward[1])
             gap = abs(float(points[list(spec.barrier), axis].mean()) - own[axis])
             if gap > 1e-6:
-                rooms[0 if spec.toward[0] == "-" else 1, 3 * f + axis] = spec.room * gap
+                # a feature that pushes its lid ahead of it (LID_PUSHES) closes the gap more slowly
+                follow = sum(
+                    widen
+                    for pusher, _, toward, _, widen in LID_PUSHES
+                    if spec.name.startswith(pusher) and spec.toward == toward
+                )
+                rooms[0 if spec.toward[0] == "-" else 1, 3 * f + axis] = spec.room * gap / (1.0 - follow)
         if spec.medial:
             gap = abs(own[0] - midline)
             if gap > 1e-6:
@@ -288,7 +311,9 @@ def limit_moves(weights: np.ndarray, rooms: np.ndarray, out: np.ndarray | None =
     """Softly limit (..., 54) feature weights (metres) by ``rooms`` (2, 54) from :func:`feature_rooms`.
 
     A weight ``w`` whose side has a finite limit ``L`` becomes ``L tanh(w / L)`` (exact for small moves,
-    never past ``L``); the others are copied. ``out`` may be ``weights`` itself.
+    never past ``L``); the others are copied. With all 54 weights, a lowered inner brow then pushes its upper lid
+    down by its share (:data:`LID_PUSHES`; the lid's own move plus the push, limited by the lid's room). ``out``
+    may be ``weights`` itself.
 
     >>> rooms = np.full((2, 2), np.inf); rooms[0, 0] = 0.005
     >>> limit_moves(np.array([-0.001, -0.02]), rooms[:, :1].repeat(2, axis=1)).round(4).tolist()
@@ -297,6 +322,8 @@ def limit_moves(weights: np.ndarray, rooms: np.ndarray, out: np.ndarray | None =
     [0.02, -0.02]
     """
     values = np.asarray(weights, dtype=np.float64)
+    if values.shape[-1] == 3 * len(FEATURE_NAMES):  # the lids' own moves, before ``out`` may overwrite them
+        lids = np.array(values[..., _pushed_columns()], copy=True)
     result = np.array(values, copy=True) if out is None else out
     if out is not None and out is not weights:
         result[...] = values
@@ -309,7 +336,36 @@ def limit_moves(weights: np.ndarray, rooms: np.ndarray, out: np.ndarray | None =
         bound = limit[cols]
         capped = sign * bound * np.tanh(sign * part / bound)
         result[..., cols] = np.where(sign * part > 0, capped, result[..., cols])
+    if values.shape[-1] == 3 * len(FEATURE_NAMES):
+        _push_lids(lids, rooms, result)
     return result
+
+
+@cache
+def _pushed_columns() -> list[int]:
+    """The 54-weight columns of the lids :data:`LID_PUSHES` pushes, in its order (Left, Right for each)."""
+    return [
+        3 * FEATURE_NAMES.index(lid + side) + AXES.index(toward[1])
+        for _, lid, toward, _, _ in LID_PUSHES
+        for side in ("Left", "Right")
+    ]
+
+
+def _push_lids(lids: np.ndarray, rooms: np.ndarray, result: np.ndarray) -> None:
+    """Each :data:`LID_PUSHES` feature's limited move toward its lid (in ``result``) moves the lid by its share:
+    the lid's own move (``lids``, :func:`_pushed_columns`) plus the push, limited by the lid's room, in place."""
+    columns = iter(enumerate(_pushed_columns()))
+    for pusher, _, toward, share, _ in LID_PUSHES:
+        axis = AXES.index(toward[1])
+        sign = 1.0 if toward[0] == "+" else -1.0
+        for side in ("Left", "Right"):
+            k, lid = next(columns)
+            push = result[..., 3 * FEATURE_NAMES.index(pusher + side) + axis]
+            raw = lids[..., k] + share * sign * np.maximum(sign * push, 0.0)
+            bound = rooms[1 if sign > 0 else 0, lid]
+            if np.isfinite(bound):
+                raw = np.where(sign * raw > 0, sign * bound * np.tanh(sign * raw / bound), raw)
+            result[..., lid] = raw
 
 
 def design_moves(rooms: np.ndarray | None = None) -> np.ndarray:
