@@ -73,7 +73,11 @@ def test_rig_columns_feature_targets_and_user_tables(tmp_path: Path):
     features = np.full((2, 54), -0.004)
     weights = driver.weights(frames, features)
     assert weights[1, 1] == 1.0 and weights[0, 1] == 0.0
-    np.testing.assert_allclose(weights[:, 2:], -0.004)  # signed metres, not clipped
+    expected = np.full((2, 54), -0.004)  # signed metres, not clipped
+    upper_lids = [k for k, name in enumerate(feature_target_names()) if name.startswith("fp_LidUpper")
+                  and name.endswith("_y")]  # fmt: skip
+    expected[:, upper_lids] = -0.004 - 0.5 * 0.004  # the lowered inner brows push them down by half (LID_PUSHES)
+    np.testing.assert_allclose(weights[:, 2:], expected, rtol=1e-6)
     with pytest.raises(InvalidValueError, match="feature_weights"):
         driver.weights(frames, np.zeros((2, 3)))
     with pytest.warns(UserWarning):

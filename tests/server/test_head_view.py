@@ -130,7 +130,7 @@ def test_a_server_serves_the_users_file_and_streams_its_shape_weights_by_name(la
         assert me["head_file"] == path.name and me["head_url"] == "/api/characters/me/head.glb"
         assert len(me["target_names"]) == 96 and me["frame_bytes"] == 44 + 2 * 96
         assert "h_expressions.MouthOpen_h" in me["target_names"] and "t_MouthOpen_h" in me["target_names"]
-        assert len(me["file_to_rig"]) == 16 and me["head_note"] == ""
+        assert len(me["file_to_rig"]) == 16 and "7 shapes mien synthesized" in me["head_note"]  # shown as its file
         builtin = info["b"]
         assert builtin["head_file"] is None and builtin["file_to_rig"] is None and len(builtin["target_names"]) == 52
         head = httpx.get(f"{server.base_url}{me['head_url']}")

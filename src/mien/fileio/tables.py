@@ -44,7 +44,7 @@ def table_version(package: str, name: str) -> str:
     """The value of the table's ``# version: ...`` comment line (``""`` when it has none).
 
     >>> table_version("mien.facs", "data/emfacs_prototypes.csv")
-    '2'
+    '3'
     """
     for comment in table_comments(package, name):
         key, _, value = comment.partition(":")

@@ -32,7 +32,7 @@ from urllib.parse import unquote
 
 import numpy as np
 
-from mien.heads.amplitude import MAX_GAIN
+from mien.heads.amplitude import MAX_GAIN, reference_moves
 from mien.rig.files.gltf import read_gltf
 from mien.rig.files.head import _vrm_expressions
 from mien.rig.model import Rig
@@ -76,7 +76,8 @@ class HeadView:
     fit_rms_m: float = 0.0
     """RMS distance of the fitted file vertices from the rig's, metres."""
     note: str = ""
-    """Why a file head is shown as mien's glTF (empty when it is shown as its file, or is no file head)."""
+    """Why a file head is shown as mien's glTF, or which synthesized shapes its file view leaves out (empty when
+    neither, or for no file head)."""
 
     @property
     def media_type(self) -> str:
@@ -102,7 +103,9 @@ def head_view(rig: Rig) -> HeadView:
     source = Path(info.path)
     if info.format == "obj-folder" or source.suffix.lower() not in (".glb", ".gltf", ".vrm"):
         return HeadView(names, None, None, None, note=f"{source.name}: an OBJ folder is shown as mien's glTF")
-    lacking = [name for name in names if not info.source_names.get(name)]
+    unsourced = [name for name in names if not info.source_names.get(name)]
+    made = set(reference_moves())  # shapes mien synthesized for what the file lacks (mien.heads.synthesize)
+    lacking = [name for name in unsourced if name not in made]
     if lacking:
         note = (f"{source.name}: shown as mien's glTF of the rig: the file has no shapes for {len(lacking)} "
                 f"of its targets ({', '.join(lacking[:3])}...)")  # fmt: skip
@@ -114,7 +117,11 @@ def head_view(rig: Rig) -> HeadView:
     file_to_rig, rms = _fit(scene.primitives, info.materials, rig.neutral)
     if rms > FIT_WARN_M:
         log.warning("%s: the file's vertices lie %.1f mm (RMS) from the rig's after placing", source.name, rms * 1e3)
-    return HeadView(frame_names, matrix, source, file_to_rig, rms)
+    note = ""
+    if unsourced:
+        note = (f"{source.name}: shown as its file, without the {len(unsourced)} shapes mien synthesized for it "
+                f"({', '.join(unsourced[:3])}...: they show in mien's renders)")  # fmt: skip
+    return HeadView(frame_names, matrix, source, file_to_rig, rms, note=note)
 
 
 def _weight_matrix(
@@ -125,7 +132,7 @@ def _weight_matrix(
     """Frame names (file shapes in order of first use) and the (n_shapes, n_targets) matrix of the rows."""
     entries: dict[tuple[str, int], float] = {}
     for column, target in enumerate(names):
-        for shape, weight, side in source_names[target]:
+        for shape, weight, side in source_names.get(target, ()):  # a synthesized target: a zero column
             factor = weight * (0.5 if side else 1.0)
             for file_shape, bind in expansions.get(shape, [(shape, 1.0)]):
                 key = (file_shape, column)

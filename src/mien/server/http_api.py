@@ -146,7 +146,9 @@ class CharacterInfo(BaseModel):
         description="Head file: 4x4 row-major similarity from the file's coordinates to mien's frame (metres, "
         "origin between the eyes, +y up, +z forward); null otherwise"
     )
-    head_note: str = Field(description="Why a head file is shown as mien's glTF instead (empty otherwise)")
+    head_note: str = Field(
+        description="Why a head file is shown as mien's glTF, or which synthesized shapes its file view leaves out"
+    )
 
 
 class CharacterState(BaseModel):
