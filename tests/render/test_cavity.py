@@ -2,10 +2,7 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
-from tests.conftest import valid_avatar
 
 from mien.render.cavity import DEPTH_M, FLOOR, INTERIOR_REGIONS, cavity_shade
 from mien.rig.builtin_head import builtin_head
@@ -50,20 +47,3 @@ def test_every_output_gets_the_shade_through_the_rigs_colours() -> None:
     np.testing.assert_allclose(colors, unshaded * shade[:, None], rtol=1e-6)
     exported, _, _ = _appearance(rig)
     np.testing.assert_allclose(exported[dark], colors[dark], rtol=1e-6)  # the glTF's back teeth are dark too
-
-
-def test_a_textured_head_files_mouth_is_shaded_too(landmarker_path: Path) -> None:
-    """A VALID avatar's teeth and tongue are drawn in the mouth's shadow (its textured mesh carries the shade);
-    the skin outside the mouth and the front teeth keep their texture's brightness."""
-    from mien.heads import load_head
-    from mien.render.materials import textured_mesh_from_rig
-
-    rig = load_head(str(valid_avatar()))
-    made = textured_mesh_from_rig(rig)
-    assert made is not None and made[0].shade is not None
-    mesh, gather = made
-    np.testing.assert_array_equal(mesh.shade, cavity_shade(rig)[gather])
-    teeth = np.isin(gather, np.asarray(rig.regions["teeth"], np.int64))
-    assert teeth.any() and mesh.shade[teeth].max() > 0.99 and np.median(mesh.shade[teeth]) < 0.6
-    inside = np.isin(gather, np.concatenate([np.asarray(rig.regions[n]) for n in INTERIOR_REGIONS if n in rig.regions]))
-    assert np.all(mesh.shade[~inside] == 1.0)

@@ -86,21 +86,6 @@ def test_texture_is_sampled_as_srgb_like_the_same_linear_factor(make_textured: C
     assert np.abs(wrong[centre].astype(int) - factor[centre].astype(int)).mean() > 20
 
 
-def test_shade_darkens_the_albedo_per_vertex(make_textured: Callable[..., TexturedRenderer]) -> None:
-    """The mouth's cavity shade multiplies the texture's linear albedo: 0.25 of a grey is a quarter as bright."""
-    level = 180
-    texture = np.full((8, 8, 4), (level, level, level, 255), np.uint8)
-    positions, uvs, triangles = quad(0.0)
-    part = (Part("quad", triangles, Material(base_color_texture=texture)),)
-    shaded = make_textured(TexturedMesh(positions, uvs, part, np.full(4, 0.25, np.float32))).render()
-    linear = 0.25 * srgb_to_linear(level)
-    factor = make_textured(one_quad(Material(base_color_factor=(linear, linear, linear, 1.0)))).render()
-    unshaded = make_textured(TexturedMesh(positions, uvs, part)).render()
-    centre = (slice(24, 40), slice(24, 40))
-    assert np.abs(shaded[centre].astype(int) - factor[centre].astype(int)).max() <= 2
-    assert unshaded[centre].mean() > shaded[centre].mean() + 40
-
-
 def test_texture_row_zero_is_the_top_of_the_part(make_textured: Callable[..., TexturedRenderer]) -> None:
     texture = np.zeros((16, 16, 4), np.uint8)
     texture[..., 3] = 255
@@ -205,8 +190,6 @@ def test_materials_reject_bad_values() -> None:
         Material(alpha_mode="SOMETIMES")  # type: ignore[arg-type]
     with pytest.raises(InvalidValueError):
         TexturedMesh(np.zeros((3, 3)), np.zeros((3, 2)), (Part("p", np.array([[0, 1, 3]])),))
-    with pytest.raises(InvalidValueError):
-        TexturedMesh(np.zeros((3, 3)), np.zeros((3, 2)), (Part("p", np.array([[0, 1, 2]])),), np.full(3, 1.5))
 
 
 # --- the glTF adapter -------------------------------------------------------------------------------------

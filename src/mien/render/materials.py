@@ -21,7 +21,6 @@ import numpy as np
 
 from mien.errors import InvalidValueError
 from mien.extras import require
-from mien.render.cavity import cavity_shade
 from mien.rig.files.head import FileRig
 
 if TYPE_CHECKING:
@@ -119,9 +118,6 @@ class TexturedMesh:
     """(n, 2) float32 texture coordinates, glTF convention (v = 0 at the image's top row)."""
     parts: tuple[Part, ...]
     """The parts, in file order (the renderer orders them for drawing)."""
-    shade: np.ndarray | None = None
-    """(n,) float32 factor on each vertex's albedo in [0, 1] (the mouth's cavity shade,
-    :func:`~mien.render.cavity.cavity_shade`), or None: all ones."""
 
     def __post_init__(self) -> None:
         positions = np.ascontiguousarray(self.positions, dtype=np.float32)
@@ -138,11 +134,6 @@ class TexturedMesh:
                 raise InvalidValueError(
                     f"part {part.name!r} triangles", int(part.triangles.max()), f"vertex ids < {len(positions)}"
                 )
-        if self.shade is not None:
-            shade = np.ascontiguousarray(self.shade, dtype=np.float32)
-            if shade.shape != (len(positions),) or not ((shade >= 0) & (shade <= 1)).all():
-                raise InvalidValueError("shade", shade.shape, f"({len(positions)},) factors in [0, 1]")
-            object.__setattr__(self, "shade", shade)
         object.__setattr__(self, "positions", positions)
         object.__setattr__(self, "uvs", uvs)
         object.__setattr__(self, "parts", parts)
@@ -249,8 +240,7 @@ def textured_mesh_from_rig(rig: object) -> tuple[TexturedMesh, np.ndarray] | Non
 
     Returns ``(mesh, gather)``: ``gather`` (k,) int32 picks, for each of the mesh's (unwelded) vertices, its rig
     vertex, so a deformed rig ``vertices[gather]`` is the mesh at that frame. Textures are decoded once per
-    image; one that cannot be decoded warns (:class:`TextureDecodeWarning`) and its parts keep their factor. The
-    mesh's ``shade`` darkens the inside of the mouth by its depth (:func:`~mien.render.cavity.cavity_shade`).
+    image; one that cannot be decoded warns (:class:`TextureDecodeWarning`) and its parts keep their factor.
     """
     if not isinstance(rig, FileRig) or rig.info is None or not rig.info.materials:
         return None
@@ -277,7 +267,5 @@ def textured_mesh_from_rig(rig: object) -> tuple[TexturedMesh, np.ndarray] | Non
         uvs.append(drawn.uvs if drawn.uvs is not None else np.zeros((len(ids), 2), np.float32))
         parts.append(Part(drawn.mesh_name, np.asarray(drawn.triangles, np.int32) + offset, decoded[key]))
         offset += len(ids)
-    gather = np.concatenate(gathers).astype(np.int32)
-    # The inside of the mouth in its shadow, as on mien's own heads: teeth and tongue dim with depth behind the lips.
-    mesh = TexturedMesh(np.concatenate(positions), np.concatenate(uvs), tuple(parts), cavity_shade(rig)[gather])
-    return mesh, gather
+    mesh = TexturedMesh(np.concatenate(positions), np.concatenate(uvs), tuple(parts))
+    return mesh, np.concatenate(gathers).astype(np.int32)

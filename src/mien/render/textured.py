@@ -5,8 +5,7 @@ textures sampled as sRGB with mipmaps, opaque and alpha-tested parts first (dept
 alpha-blended parts (hair cards, lashes, brows) back to front by part centroid with depth writes off, under
 the lights of the untextured :class:`~mien.render.offscreen.OffscreenRenderer` (see
 :mod:`mien.render.textured_shaders`), with multisampling. Only positions and normals change per frame
-(morph targets, skinning): UVs, the albedo shade (the mouth's cavity shade), indices and textures are uploaded
-once. It needs what the untextured renderer
+(morph targets, skinning): UVs, indices and textures are uploaded once. It needs what the untextured renderer
 needs (moderngl and Mesa's EGL; see :mod:`mien.render.offscreen`).
 
 Normals are recomputed each frame with :func:`~mien.render.offscreen.vertex_normals` over *welded*
@@ -127,8 +126,6 @@ class TexturedRenderer(GLSurface):
             self._position_buffer = ctx.buffer(mesh.positions.tobytes())
             self._normal_buffer = ctx.buffer(reserve=n * 12)
             self._uv_buffer = ctx.buffer(mesh.uvs.tobytes())
-            shade = mesh.shade if mesh.shade is not None else np.ones(n, np.float32)
-            self._shade_buffer = ctx.buffer(np.ascontiguousarray(shade, np.float32).tobytes())
             index_buffer = ctx.buffer(self._triangles.tobytes())
             self._vaos = {
                 alpha_test: ctx.vertex_array(
@@ -137,7 +134,6 @@ class TexturedRenderer(GLSurface):
                         (self._position_buffer, "3f", "in_position"),
                         (self._normal_buffer, "3f", "in_normal"),
                         (self._uv_buffer, "2f", "in_uv"),
-                        (self._shade_buffer, "1f", "in_shade"),
                     ],
                     index_buffer=index_buffer,
                     index_element_size=4,

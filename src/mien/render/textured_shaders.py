@@ -2,8 +2,7 @@
 
 The lighting is the untextured renderer's (same :data:`~mien.render.shaders.LIGHTS`, key + fill + rim +
 hemispherical ambient + a little key specular, gamma 2.2 output), so a textured head and an untextured one
-look alike; only the albedo differs: ``base_color_factor * texture(uv)`` times the per-vertex shade (the mouth's
-cavity shade, :mod:`mien.render.cavity`), the texture stored as sRGB
+look alike; only the albedo differs: ``base_color_factor * texture(uv)``, the texture stored as sRGB
 (``GL_SRGB8_ALPHA8``: the sampler returns linear values, filtered and mip-mapped in linear light).
 
 Alpha modes (glTF 2.0): OPAQUE writes alpha 1; MASK discards fragments under the cutoff; BLEND outputs the
@@ -59,11 +58,9 @@ uniform mat4 u_view;
 in vec3 in_position;
 in vec3 in_normal;
 in vec2 in_uv;
-in float in_shade;
 out vec3 v_normal;
 out vec3 v_eye_position;
 out vec2 v_uv;
-out float v_shade;
 #ifdef PER_VERTEX_DIFFUSE
 out vec3 v_front_light;
 out vec3 v_back_light;
@@ -75,7 +72,6 @@ void main() {
     v_eye_position = (u_view * world).xyz;
     v_normal = mat3(u_view) * in_normal;
     v_uv = in_uv;
-    v_shade = in_shade;
 #ifdef PER_VERTEX_DIFFUSE
     vec3 n = normalize(v_normal);
     vec3 to_eye = normalize(-v_eye_position);
@@ -95,7 +91,6 @@ uniform float u_alpha_cutoff;
 in vec3 v_normal;
 in vec3 v_eye_position;
 in vec2 v_uv;
-in float v_shade;
 #ifdef PER_VERTEX_DIFFUSE
 in vec3 v_front_light;
 in vec3 v_back_light;
@@ -104,7 +99,6 @@ in vec2 v_key_dots;
 out vec4 f_color;
 void main() {
     vec4 base = u_base_color_factor * texture(u_base_color, v_uv);
-    base.rgb *= v_shade;  // the mouth's cavity shade (mien.render.cavity), 1 elsewhere
 #ifdef ALPHA_TEST
     if (base.a < u_alpha_cutoff) discard;
 #endif
