@@ -42,20 +42,21 @@ def live() -> Iterator[ServerThread]:
         yield server
 
 
+def wait_for(predicate: Callable[[], Any], timeout_s: float = 3.0, what: str = "condition") -> Any:
+    """Poll ``predicate`` every 10 ms for at most ``timeout_s`` seconds; return its truthy value or fail."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        value = predicate()
+        if value:
+            return value
+        time.sleep(0.01)
+    pytest.fail(f"{what} not reached in {timeout_s} s")
+
+
 @pytest.fixture
 def wait_until() -> Callable[..., Any]:
-    """``wait_until(predicate, timeout_s=3.0)``: poll every 10 ms (bounded), return the truthy value or fail."""
-
-    def wait(predicate: Callable[[], Any], timeout_s: float = 3.0, what: str = "condition") -> Any:
-        deadline = time.monotonic() + timeout_s
-        while time.monotonic() < deadline:
-            value = predicate()
-            if value:
-                return value
-            time.sleep(0.01)
-        pytest.fail(f"{what} not reached in {timeout_s} s")
-
-    return wait
+    """``wait_until(predicate, timeout_s=3.0, what=...)``: :func:`wait_for` as a fixture."""
+    return wait_for
 
 
 @pytest.fixture

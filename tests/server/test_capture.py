@@ -5,8 +5,7 @@ other character stays on the clock."""
 from __future__ import annotations
 
 import json
-import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
@@ -14,6 +13,8 @@ from typing import Any
 import httpx
 import numpy as np
 import pytest
+from tests.server.conftest import wait_for
+from tests.videos import encode_with_pts
 
 from mien.cli import main
 from mien.client import UdpClient, WebSocketClient
@@ -35,16 +36,6 @@ def _server(source: Path, landmarker: Path, **capture: Any) -> ServerThread:
 
 def _capture(server: ServerThread) -> dict[str, Any]:
     return httpx.get(f"{server.base_url}/api/capture", timeout=10).json()
-
-
-def _wait(predicate: Callable[[], Any], timeout_s: float, what: str) -> Any:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        value = predicate()
-        if value:
-            return value
-        time.sleep(0.05)
-    pytest.fail(f"{what} not reached in {timeout_s} s")
 
 
 @pytest.fixture(scope="module")
@@ -134,7 +125,7 @@ def test_capture_messages_without_a_source_are_refused(live, wait_until) -> None
 
 
 def _track_some(server: ServerThread, frames: int) -> dict[str, Any]:
-    return _wait(lambda: (s := _capture(server))["frames_tracked"] >= frames and s, 30.0, f"{frames} frames tracked")
+    return wait_for(lambda: (s := _capture(server))["frames_tracked"] >= frames and s, 30.0, f"{frames} frames tracked")
 
 
 def test_a_video_without_a_face_leaves_the_face_neutral(shared_data: Path, landmarker_path: Path) -> None:
@@ -178,10 +169,10 @@ def test_a_video_truncated_mid_play_fails_visibly(shared_data: Path, landmarker_
     truncated = tmp_path / "truncated.mp4"
     truncated.write_bytes(faststart.read_bytes()[: int(faststart.stat().st_size * 0.6)])
     with _server(truncated, landmarker_path) as server:
-        status = _wait(lambda: (s := _capture(server))["state"] == "failed" and s, 30.0, "the capture's failure")
+        status = wait_for(lambda: (s := _capture(server))["state"] == "failed" and s, 30.0, "the capture's failure")
         with UdpClient(port=server.udp_port) as udp:
             udp.send({"AU12": 2}, speed=1.0, character="b")
-            _wait(
+            wait_for(
                 lambda: server.call(lambda: server.server.registry.state(server.server.registry.get("b"))["AU12L"]),
                 10.0,
                 "b's command after the failure",
@@ -195,27 +186,15 @@ def test_a_video_truncated_mid_play_fails_visibly(shared_data: Path, landmarker_
 def test_a_variable_frame_rate_plays_on_its_own_time_stamps(
     shared_data: Path, landmarker_path: Path, tmp_path: Path
 ) -> None:
-    import av
 
     from mien.tracking.video import iter_frames
 
     decoded = list(iter_frames(shared_data / "video" / "single_face.mp4"))[:20]
     pts_ms = np.concatenate([[0], np.cumsum([(30, 110, 50, 160, 70)[i % 5] for i in range(len(decoded) - 1)])])
     vfr = tmp_path / "vfr.mp4"
-    time_base = Fraction(1, 1000)
-    with av.open(str(vfr), "w") as container:
-        stream = container.add_stream("libx264", rate=30)
-        stream.width, stream.height, stream.pix_fmt = 640, 360, "yuv420p"
-        stream.time_base = stream.codec_context.time_base = time_base
-        for (_, rgb), stamp in zip(decoded, pts_ms.tolist(), strict=True):
-            frame = av.VideoFrame.from_ndarray(rgb, format="rgb24")
-            frame.pts, frame.time_base = stamp, time_base
-            for packet in stream.encode(frame):
-                container.mux(packet)
-        for packet in stream.encode():
-            container.mux(packet)
+    encode_with_pts(vfr, [rgb for _, rgb in decoded], pts_ms.tolist(), Fraction(1, 1000))
     with _server(vfr, landmarker_path) as server:
-        status = _wait(lambda: (s := _capture(server))["state"] == "ended" and s, 30.0, "the end of the video")
+        status = wait_for(lambda: (s := _capture(server))["state"] == "ended" and s, 30.0, "the end of the video")
     source_ms = np.round(np.array([t["source_s"] for t in status["timings"]]) * 1000).astype(int)
     assert status["frames_read"] == len(decoded) and len(source_ms) >= 5  # (a busy tracker skips frames)
     assert set((source_ms - source_ms[0]).tolist()) <= set(pts_ms.tolist())  # its own time stamps, not i / rate

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from tests.videos import encode_with_pts
 
 from mien.errors import InvalidValueError
 from mien.tracking.track import Track, apply_gaps, fill_gaps, resample_on_times, track_video
@@ -16,31 +17,12 @@ INTERVALS_MS = (10, 50, 20, 80, 40)
 """A deliberately irregular frame spacing, milliseconds."""
 
 
-def _encode(path: Path, frames: list[np.ndarray], pts: list[int], time_base: Fraction) -> None:
-    """Encode RGB frames with the given presentation time stamps (H.264 in MP4)."""
-    import av
-
-    height, width = frames[0].shape[:2]
-    with av.open(str(path), "w") as container:
-        stream = container.add_stream("libx264", rate=30)
-        stream.width, stream.height, stream.pix_fmt = width, height, "yuv420p"
-        stream.time_base = time_base
-        stream.codec_context.time_base = time_base
-        for rgb, stamp in zip(frames, pts, strict=True):
-            frame = av.VideoFrame.from_ndarray(rgb, format="rgb24")
-            frame.pts, frame.time_base = stamp, time_base
-            for packet in stream.encode(frame):
-                container.mux(packet)
-        for packet in stream.encode():
-            container.mux(packet)
-
-
 def test_irregular_time_stamps_come_back_exactly(tmp_path: Path) -> None:
     n = 30
     pts = np.concatenate([[0], np.cumsum([INTERVALS_MS[i % len(INTERVALS_MS)] for i in range(n - 1)])]).tolist()
     frames = [np.full((64, 64, 3), 8 * i, np.uint8) for i in range(n)]  # brightness numbers the frame
     video = tmp_path / "vfr.mp4"
-    _encode(video, frames, pts, Fraction(1, 1000))
+    encode_with_pts(video, frames, pts, Fraction(1, 1000))
     decoded = list(iter_frames(video))
     times = np.array([t for t, _ in decoded])
     assert len(decoded) == n
@@ -114,7 +96,7 @@ def test_a_variable_rate_copy_of_a_real_video_keeps_its_timing(
     keep = [i for i in range(len(decoded)) if i < 20 or i % 3 == 0]  # 30 fps, then 10 fps
     vfr = tmp_path / "smile_vfr.mp4"
     first_pts = decoded[0][0]
-    _encode(vfr, [decoded[i][1] for i in keep], [decoded[i][0] - first_pts for i in keep], time_base)
+    encode_with_pts(vfr, [decoded[i][1] for i in keep], [decoded[i][0] - first_pts for i in keep], time_base)
 
     original = track_video(single_face_video, landmarker_path, use_cache=False, show_progress=False)
     variable = track_video(vfr, landmarker_path, use_cache=False, show_progress=False)
@@ -146,7 +128,7 @@ def test_segments_of_a_variable_rate_video_keep_every_time_stamp(tmp_path: Path)
     frames = [rng.integers(0, 255, (48, 64, 3), dtype=np.uint8) for _ in range(30)]
     stamps = np.concatenate([[0], np.cumsum([INTERVALS_MS[i % len(INTERVALS_MS)] for i in range(29)])]).tolist()
     video = tmp_path / "vfr.mp4"
-    _encode(video, frames, stamps, Fraction(1, 1000))
+    encode_with_pts(video, frames, stamps, Fraction(1, 1000))
     whole = [t for t, _ in iter_frames(video)]
     plan = plan_segments(video, 3, warmup_frames=2)
     assert plan is not None
