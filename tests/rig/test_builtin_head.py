@@ -154,6 +154,20 @@ def test_brow_inner_up(rig: Rig) -> None:
     assert moved(rig, "browInnerUp", np.concatenate([rig.regions["lips"], rig.regions["lower_lid_L"]])) < 2e-4
 
 
+@pytest.mark.parametrize("identity", ["default", "b"])
+def test_inner_brow_raise_leaves_the_upper_lid_margin(identity: str) -> None:
+    # AU1 lifts the brow and the lid fold, not the lid's margin (the levator's, AU5: fear). The margin rose up to
+    # 1.5 mm and the b head's sadness read fear in 3 of 8 frontal renders (docs/VALIDATION.md, issue 31).
+    rig, mesh = builtin_head(identity), builtin_head_mesh(identity)
+    d = dense(rig, "browInnerUp")
+    for eye in (0, 1):
+        margin = mesh.eye_seams[eye]["upper"]
+        assert np.abs(d[margin, 1]).max() < 2e-4
+    assert d[rig.landmarks[21], 1] > 0.008  # the inner brow itself still rises
+    assert d[rig.landmarks[39], 1] < 2e-4 and d[rig.landmarks[42], 1] < 2e-4  # the inner eye corners stay
+    assert dense(rig, "eyeWideLeft")[mesh.eye_seams[0]["upper"], 1].max() > 0.003  # AU5 still widens it
+
+
 def test_lateral_targets_stay_on_their_side(rig: Rig) -> None:
     x = rig.neutral[:, 0]
     for name in ARKIT_NAMES:

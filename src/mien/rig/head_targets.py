@@ -30,7 +30,16 @@ from mien.rig.head_geometry import (
     smoothstep,
 )
 
-__all__ = ["CORNER_CLOSE_M", "JAW_OPEN_RAD", "LIPS_PARTING", "arkit_deltas", "jaw_weights", "lid_weights"]
+__all__ = [
+    "BROW_LID_HOLD_M",
+    "CORNER_CLOSE_M",
+    "JAW_OPEN_RAD",
+    "LIPS_PARTING",
+    "arkit_deltas",
+    "jaw_weights",
+    "lid_weights",
+    "margin_hold",
+]
 
 JAW_OPEN_RAD = 0.32
 """Jaw rotation at ``jawOpen`` = 1, radians (about 18 degrees)."""
@@ -38,6 +47,13 @@ EYE_YAW_RAD = np.radians(30.0)
 """Eyeball rotation at ``eyeLookIn``/``eyeLookOut`` = 1."""
 EYE_PITCH_RAD = np.radians(25.0)
 """Eyeball rotation at ``eyeLookUp``/``eyeLookDown`` = 1."""
+BROW_LID_HOLD_M = 0.009
+"""``browInnerUp`` (AU1) leaves the upper lids' margins in place and lifts the lid fold above them fully only this
+far (metres) above the margin (:func:`margin_hold`). The frontalis raises the brow and the skin under it; the lid's
+margin is raised by the levator (AU5, ``eyeWide``), fear's sign, not sadness's. Before, AU1 lifted the inner
+margin up to 1.5 mm and the built-in b head's sadness read fear in 3 of 8 frontal renders (now 0; sadness's
+margin over the next label 0.03 -> 0.16 on b, 0.15 -> 0.27 on the default head; docs/VALIDATION.md). ``browOuterUp``
+keeps lifting the lid with it: holding it too cost a frontal fear."""
 CORNER_CLOSE_M = 0.008
 """Within this distance of a mouth corner the two lips' edges move together in :data:`LIPS_PARTING` (fully at the
 corner, not at all this far in), so an opening mouth ends in closed, rounded corners inside the vermilion."""
@@ -273,7 +289,10 @@ def arkit_deltas(mesh: HeadMesh) -> dict[str, np.ndarray]:
     outer_share = (to_tail + 0.25 * np.exp(-0.5 * ((t_brow - 0.6) / 0.2) ** 2)) * lateral_fade
     left_half = 0.5 * (1.0 + np.tanh(x / 0.004))
     inner = brow_band(0) * left_half + brow_band(1) * (1.0 - left_half)
-    out["browInnerUp"] = vec(inner * inner_share, (0.0, 0.012, 0.0005))
+    # The inner brow's raise lifts the lid fold's skin, not the upper lid's margin (the levator, AU5, does that):
+    # widened inner lids turned the built-in b head's sadness into fear (docs/VALIDATION.md, issue 31).
+    hold = margin_hold(mesh, BROW_LID_HOLD_M)
+    out["browInnerUp"] = vec(inner * inner_share * hold, (0.0, 0.012, 0.0005))
 
     def brow(cx: float, cy: float, sx: float, eye: int) -> np.ndarray:
         return front * mesh.upper_lid_side[:, eye] * _gauss_asym(x, yd, cx, cy, sx, 0.02, 0.0065)
@@ -316,6 +335,21 @@ def arkit_deltas(mesh: HeadMesh) -> dict[str, np.ndarray]:
     assert not missing, missing
     _close_corners(out, mesh)
     return {name: out[name] for name in ARKIT_NAMES}
+
+
+def margin_hold(mesh: HeadMesh, reach_m: float) -> np.ndarray:
+    """(n,) 0..1 share of a brow raise each vertex keeps: 0 on and below the upper lids' margins (the eye corners
+    too), rising smoothly to 1 ``reach_m`` (metres) above them; 1 beside and away from the eyes."""
+    shape = mesh.shape
+    x, yd = mesh.material[:, 0], mesh.material[:, 1]
+    hold = np.ones(len(x))
+    for e in (0, 1):
+        c = shape.eye_centers[e]
+        t = np.clip((x - c[0]) / shape.eye_half_width_m, -1.0, 1.0)
+        h_up, _ = lid_heights(t, shape)
+        lateral = 1.0 - smoothstep(shape.eye_half_width_m, shape.eye_half_width_m + 0.006, np.abs(x - c[0]))
+        hold *= 1.0 - lateral * (1.0 - smoothstep(0.0, reach_m, yd - h_up))
+    return hold
 
 
 def _close_corners(out: dict[str, np.ndarray], mesh: HeadMesh) -> None:
