@@ -97,9 +97,10 @@ def test_the_second_load_is_answered_by_the_cache(monkeypatch: pytest.MonkeyPatc
 
 
 def test_ict_written_by_blender_is_found_near_icts_own_landmarks(ict_glb: Path, ict) -> None:  # type: ignore[no-untyped-def]
-    """The issue asks 2 mm (median); measured 2.7 mm on the untextured head (eyes 2.1, lips 1.8-2.1, nose 3.0,
-    brows 6 with no brows drawn, jaw contour 6.8; 4.2 before the contours were spaced as iBUG spaces them and
-    rays went through the lashes). The bounds guard those figures."""
+    """The issue asks 2 mm (median); measured 2.4 mm on the untextured head (eyes 1.3, lips 1.7-1.8, nose 3.0,
+    brows 6.2 with no brows drawn, jaw contour 5.2; 2.6 with three close looks, 4.2 before the contours were
+    spaced as iBUG spaces them and rays went through the lashes). Brows and nose lie between ICT's own and the
+    300-W mean shape (mediapipe_to_ibug68.csv): ICT's are not the average face. The bounds guard those figures."""
     native, _ = ict
     rig = load_head(str(ict_glb))
     assert isinstance(rig, FileRig)
@@ -107,9 +108,9 @@ def test_ict_written_by_blender_is_found_near_icts_own_landmarks(ict_glb: Path, 
     found = rig.neutral[rig.landmarks].astype(np.float64)
     shift = np.median(found - own, axis=0)  # the two loaders put the origin 0.4 mm apart (eyeball fits)
     distances_mm = np.linalg.norm(found - shift - own, axis=1) * 1000.0
-    assert np.median(distances_mm) < 3.5
-    assert np.median(distances_mm[36:48]) < 2.6
-    assert np.median(distances_mm[48:68]) < 2.6
+    assert np.median(distances_mm) < 3.0
+    assert np.median(distances_mm[36:48]) < 2.0
+    assert np.median(distances_mm[48:68]) < 2.4
 
 
 def test_named_heads_come_as_they_are() -> None:
