@@ -515,6 +515,39 @@ def test_driver_limits_moves_toward_barriers_only(head: tuple[Rig, FeaturePointR
     assert 0.0 < widened[0] < widened[1] < rooms[1, corner] < happy[1, corner]
 
 
+def test_a_raised_cheek_held_below_its_lid_bunches_forward(head: tuple[Rig, FeaturePointRig]) -> None:
+    """Joy raises the cheeks 13.2 mm at 1.2 (Table 1); the cheek slides up only to its room below the lower lid, and
+    BUNCHES' share of what the limit took brings it forward, softly limited (Table 1 leaves it at depth 0); a cheek
+    that falls (surprise) is not limited and does not bunch; in place gives the same."""
+    from mien.rig.feature_points import BUNCH_ROOM, BUNCHES, feature_rooms, limit_moves
+
+    rig, _ = head
+    rooms = feature_rooms(rig)
+    names = feature_target_names()
+    share = {f: s for f, _, _, s in BUNCHES}["Cheek"]
+    for side in ("Left", "Right"):
+        rise, depth = names.index(f"fp_Cheek{side}_y"), names.index(f"fp_Cheek{side}_z")
+        gap = rig.neutral[rig.landmarks[[46, 47] if side == "Left" else [40, 41]], 1].mean()
+        gap -= rig.neutral[rig.landmarks[[14, 35, 46] if side == "Left" else [2, 31, 41]], 1].mean()
+        assert rooms[1, rise] == pytest.approx(0.2 * gap)
+        reach = BUNCH_ROOM * rooms[1, rise]
+        forward = []
+        for intensity in (1.2, 2.4):
+            happy = np.array([table1_weights(table1("happy"), intensity)[n] for n in names])
+            assert happy[depth] == 0.0 and happy[rise] > 2.0 * rooms[1, rise]
+            out = limit_moves(happy, rooms)
+            assert out[rise] == pytest.approx(rooms[1, rise] * np.tanh(happy[rise] / rooms[1, rise]))
+            assert out[depth] == pytest.approx(reach * np.tanh(share * (happy[rise] - out[rise]) / reach))
+            in_place = happy.copy()
+            np.testing.assert_array_equal(limit_moves(in_place, rooms, out=in_place), out)
+            forward.append(out[depth])
+        assert 0.002 < forward[0] < forward[1] < reach
+        surprise = np.array([table1_weights(table1("surprise"), 2.4)[n] for n in names])
+        assert surprise[rise] < 0.0
+        out = limit_moves(surprise, rooms)
+        assert out[rise] == pytest.approx(surprise[rise]) and out[depth] == 0.0
+
+
 def test_a_lowered_brow_pushes_its_upper_lid_down(head: tuple[Rig, FeaturePointRig]) -> None:
     """Anger lowers the inner brows, and the upper lids go down by LID_PUSHES' share of the brows' fall (Table 1
     leaves them still); a raised brow (surprise) leaves the lids as Table 1 sets them."""

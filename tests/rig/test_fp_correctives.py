@@ -46,10 +46,15 @@ def test_each_side_follows_its_own_feature(rigged: tuple[Rig, FeaturePointRig]) 
     rig, _ = rigged
     found = {c.target: c for c in correctives(rig)}
     smile = found["fpc_mouthSmileLeft"]
-    assert smile.sources == (3 * FEATURE_NAMES.index("LipCornerLeft") + 1,)  # its own corner's rise (rig y)
-    assert 1 / smile.gain == pytest.approx(
-        rig.target("mouthSmileLeft").dense(rig.n_vertices)[rig.landmarks[54], 1], rel=0.3
-    )
+    corner = 3 * FEATURE_NAMES.index("LipCornerLeft")
+    assert smile.sources == (corner, corner + 1)  # its own corner's move in the picture plane (rig x and y)
+    own = rig.target("mouthSmileLeft").dense(rig.n_vertices)[rig.landmarks[54], :2]
+    assert 1 / smile.gain == pytest.approx(np.linalg.norm(own), rel=0.3)
+    # the projection on the shape's own move: its own move drives it by 1, a move across it by 0
+    along = np.array(smile.weights)
+    assert along @ (np.array(smile.weights) / smile.gain**2) == pytest.approx(1.0)
+    assert along @ np.array([-smile.weights[1], smile.weights[0]]) == pytest.approx(0.0, abs=1e-9)
+    assert along[0] > 0 and along[1] > 0  # up and out to the character's left
     assert found["fpc_browDownLeft"].gain < 0  # driven by a fall
     # the built-in head has one browInnerUp: both inner brows drive it; both nostril wings follow the Nostrils
     assert found["fpc_browInnerUp"].sources == tuple(
@@ -90,8 +95,8 @@ def test_the_driver_follows_the_feature_within_the_shapes_range(rigged: tuple[Ri
     rig, _ = rigged
     joy, joy_strong, sad = _weights(rig, "joy", 0.5), _weights(rig, "joy", 2.4), _weights(rig, "sadness", 2.4)
     smile = next(c for c in correctives(rig) if c.target == "fpc_mouthSmileLeft")
-    rise = joy["fp_LipCornerLeft_y"]  # after the barrier limit, as the driver shows it
-    assert joy["fpc_mouthSmileLeft"] == pytest.approx(min(rise * smile.gain, 1.0), rel=1e-5)
+    out_up = [joy["fp_LipCornerLeft_x"], joy["fp_LipCornerLeft_y"]]  # after the barrier limit, as the driver shows it
+    assert joy["fpc_mouthSmileLeft"] == pytest.approx(min(float(np.dot(out_up, smile.weights)), 1.0), rel=1e-5)
     assert 0 < joy["fpc_mouthSmileLeft"] < joy_strong["fpc_mouthSmileLeft"] == 1.0  # never past the artist's shape
     assert sad["fpc_mouthSmileLeft"] == 0.0  # corners down: no smile detail
     assert sad["fpc_browInnerUp"] > 0 and sad["fpc_browDownLeft"] == 0.0
@@ -103,7 +108,8 @@ def test_drive_correctives_clips_to_the_shape_range(rigged: tuple[Rig, FeaturePo
     found = {c.target: c for c in correctives(rig)}
     smile, inner = found["fpc_mouthSmileLeft"], found["fpc_browInnerUp"]
     moves = np.zeros((3, 54))
-    moves[:, smile.sources[0]] = [-0.01, 0.5 / smile.gain, 1.0]
+    for source, weight in zip(smile.sources, smile.weights, strict=True):  # along the shape's own move
+        moves[:, source] = np.array([-0.01, 0.5, 1.0]) * weight / smile.gain**2
     moves[:, inner.sources[0]] = [0.0, 0.6 / inner.gain, 0.0]  # one inner brow up, the other still: half
     out = drive_correctives(moves, corrective_matrix((smile, inner)), np.array([1, 2]), np.zeros((3, 3), np.float32))
     np.testing.assert_allclose(out[:, 1], [0.0, 0.5, 1.0], rtol=1e-6)

@@ -74,6 +74,8 @@ from mien.rig.model import MorphTarget, Rig
 
 __all__ = [
     "AXES",
+    "BUNCHES",
+    "BUNCH_ROOM",
     "EYE_SLIDE_FEATURES",
     "FEATURE_NAMES",
     "BandSpec",
@@ -122,6 +124,29 @@ feature-point anger reads anger in 7 of 8 renders (was 3 of 8; docs/VALIDATION.m
 brow (surprise, fear, sadness) leaves the lids as Table 1 sets them. ``widen`` 0.3, not the full share: at 0.35 the
 built-in head's left upper lid turned 1-3 triangles over in anger, frustrated and evil at 2.4. A raised cheek pushing
 its lower lid up the same way (0.3) made ICT a's joy at 1.2 read neutral more (happy 0.33 -> 0.28): not used."""
+BUNCHES: tuple[tuple[str, str, str, float], ...] = (("Cheek", "+y", "+z", 0.4),)
+"""``(feature, toward, into, share)``: what :func:`limit_moves` takes from a feature's move toward its barrier (rig
+axis and sign ``toward``, both sides) moves that feature's skin along ``into`` by ``share`` of it, softly limited to
+:data:`BUNCH_ROOM` times the move's own limit: the skin that cannot slide further bunches.
+
+Table 1 raises the cheeks 11 mm per unit of joy (13.2 mm at 1.2), and the smoothest field slid the whole cheek up as
+one piece (10.2 mm on ICT at 1.2, its room 0.5 of the gap to the lower lid): the cheek's mound rose toward the eye,
+the skin below it turned hollow and a shadow ran from the inner eye corner down beside the nose, a gaunt face (ICT
+a's frontal joy at 1.2 read neutral 0.55 over happy 0.33). Pasting the FACS basis's cheeks alone into that picture
+(the band beside the nose between the eyes and the mouth) made it read happy 0.55; its mouth made it read less happy.
+The cheek raiser does not slide the cheek onto the eye: it pushes the skin toward the eye, where it bunches and bags
+below the lower lid (Ekman & Friesen, FACS manual: AU6), and ICT's own cheek raise and smile bring the cheek forward
+0.4 mm per mm they raise it (cheekSquint 2.0 mm for 5.4 mm, mouthSmile 2.0 for 4.4, at the cheek's anchor). So the
+cheek's room toward its lower lid is 0.2 of the gap (``data/mpeg4_features.csv``; 5.4 mm on ICT at 1.2 and at 2.4),
+0.4 of what the limit takes comes forward (2.9 mm at 1.2, 5.7 at 2.4 on ICT), and the cheek raiser's skin detail
+(``cheekSquint``, :mod:`mien.rig.fp_correctives`) follows that bunching. With the smile's detail driven by the
+corner's move in the picture plane (``mpeg4_correctives.csv``) ICT's frontal feature-point joy at 1.2 reads happy at
+1 m and 3 m on both identities (docs/VALIDATION.md). Room 0.1 read the same on ICT but turned one to five triangles
+over beside the built-in head's mouth corners in joy at 2.4, where the cheek no longer rose with the corner."""
+BUNCH_ROOM = 1.25
+"""How far the skin of a :data:`BUNCHES` feature comes forward at most, in multiples of its move's own limit ``L``
+(softly: ``R tanh(share * taken / R)``, ``R = BUNCH_ROOM * L``; 6.8 mm on ICT): uncapped, joy at 2.4 pushed ICT's
+cheeks 9.5 mm forward."""
 EYE_SLIDE_M = 0.008
 """Skin within this distance of an eyeball's surface slides over it (:func:`eye_slide`)."""
 EYE_SLIDE_FULL = 0.5
@@ -324,6 +349,7 @@ def limit_moves(weights: np.ndarray, rooms: np.ndarray, out: np.ndarray | None =
     values = np.asarray(weights, dtype=np.float64)
     if values.shape[-1] == 3 * len(FEATURE_NAMES):  # the lids' own moves, before ``out`` may overwrite them
         lids = np.array(values[..., _pushed_columns()], copy=True)
+        asked = np.array(values[..., _bunched_columns()[0]], copy=True)
     result = np.array(values, copy=True) if out is None else out
     if out is not None and out is not weights:
         result[...] = values
@@ -338,7 +364,37 @@ def limit_moves(weights: np.ndarray, rooms: np.ndarray, out: np.ndarray | None =
         result[..., cols] = np.where(sign * part > 0, capped, result[..., cols])
     if values.shape[-1] == 3 * len(FEATURE_NAMES):
         _push_lids(lids, rooms, result)
+        _bunch(asked, rooms, result)
     return result
+
+
+@cache
+def _bunched_columns() -> tuple[list[int], list[int], list[float], list[float]]:
+    """``(moved, bunched, signs, shares)``: per :data:`BUNCHES` row and side, the 54-weight column of the limited
+    move, the column the skin bunches along, the sign of the move toward the barrier and the share."""
+    moved, bunched, signs, shares = [], [], [], []
+    for feature, toward, into, share in BUNCHES:
+        for side in ("Left", "Right"):
+            f = 3 * FEATURE_NAMES.index(feature + side)
+            moved.append(f + AXES.index(toward[1]))
+            bunched.append(f + AXES.index(into[1]))
+            signs.append(1.0 if toward[0] == "+" else -1.0)
+            shares.append(share if into[0] == "+" else -share)
+    return moved, bunched, signs, shares
+
+
+def _bunch(asked: np.ndarray, rooms: np.ndarray, result: np.ndarray) -> None:
+    """What the limit took from each :data:`BUNCHES` move (``asked`` less its limited value in ``result``) moves
+    the skin along the row's ``into`` axis by its share, softly limited to :data:`BUNCH_ROOM` times the move's own
+    limit, in place."""
+    moved, bunched, signs, shares = _bunched_columns()
+    for k, (m, b, sign, share) in enumerate(zip(moved, bunched, signs, shares, strict=True)):
+        bound = rooms[1 if sign > 0 else 0, m]
+        if not np.isfinite(bound):
+            continue
+        taken = np.maximum(sign * (asked[..., k] - result[..., m]), 0.0)
+        reach = BUNCH_ROOM * bound
+        result[..., b] = result[..., b] + np.sign(share) * reach * np.tanh(abs(share) * taken / reach)
 
 
 @cache

@@ -14,8 +14,10 @@ corrective moves a lid margin only toward the eye corners, where the lid's own f
 the built-in and ICT heads). So the anchors still move exactly by Table 1, and only the skin between them changes.
 Its weight is the driving feature's move (after :func:`mien.rig.feature_points.limit_moves`) over the shape's own
 move on that feature's plateau, clipped to 0..1: the artist's range, never past it, and nothing for a move the
-other way. ``S`` is the shape as its artist shipped it (a factor mien puts on a head's shape, ICT's browDown x 2
-for the FACS basis, :attr:`mien.rig.model.Rig.shape_gains`, is divided out). A driver turns the correctives into
+other way (a corrective of :data:`PICTURE_PLANE`, the smile: the feature's move in the picture plane projected on
+the shape's own move there, over that move's length). ``S`` is the shape as its artist shipped it (a factor mien
+puts on a head's shape, ICT's browDown x 2 for the FACS basis, :attr:`mien.rig.model.Rig.shape_gains`, is divided
+out). A driver turns the correctives into
 one (54, k) matrix once (:func:`corrective_matrix`), so a tick is one product and a clip (:func:`drive_correctives`).
 
 >>> spec = corrective_specs()[0]
@@ -36,6 +38,7 @@ from mien.rig.model import MorphTarget, Rig
 
 __all__ = [
     "CORRECTIVE_PREFIX",
+    "PICTURE_PLANE",
     "Corrective",
     "CorrectiveSpec",
     "corrective_matrix",
@@ -46,6 +49,9 @@ __all__ = [
 ]
 
 CORRECTIVE_PREFIX = "fpc_"
+PICTURE_PLANE = "xy"
+"""The ``axis`` of a corrective driven by its feature's move in the picture plane (rig x and y) along the shape's own
+move there, not by one axis: the smile's corner goes up and out together (AU12 pulls it obliquely)."""
 """Prefix of the compiled corrective targets: ``fpc_mouthSmileLeft``..."""
 PLATEAU_SHARE = 0.999
 """A feature target's vertices that move at least this share of the feature are its plateau."""
@@ -62,7 +68,8 @@ class CorrectiveSpec:
     feature: str
     """The driving feature, without its side (``LipCorner``), or a feature of its own (``Nostrils``)."""
     axis: str
-    """Rig axis and sign of the driving move (``"+y"`` up, ``"-y"`` down)."""
+    """Rig axis and sign of the driving move (``"+y"`` up, ``"-y"`` down), or ``"xy"``: the feature's move in the
+    picture plane (rig x and y) along the shape's own move there."""
     why: str
     """The skin detail the shape adds, with its source."""
 
@@ -75,8 +82,10 @@ def corrective_specs() -> tuple[CorrectiveSpec, ...]:
         spec = CorrectiveSpec(row["shape"].strip(), row["feature"].strip(), row["axis"].strip(), row["why"].strip())
         if _feature_sides(spec.feature) is None:
             raise UnknownNameError("feature driving a corrective", spec.feature, FEATURE_NAMES)
-        if len(spec.axis) != 2 or spec.axis[0] not in "+-" or spec.axis[1] not in AXES:
-            raise InvalidValueError(f"axis of the {spec.shape} corrective", spec.axis, "+x, -x, +y, -y, +z or -z")
+        if spec.axis != PICTURE_PLANE and (len(spec.axis) != 2 or spec.axis[0] not in "+-" or spec.axis[1] not in AXES):
+            raise InvalidValueError(
+                f"axis of the {spec.shape} corrective", spec.axis, "+x, -x, +y, -y, +z, -z or xy (the picture plane)"
+            )
         specs.append(spec)
     return tuple(specs)
 
@@ -101,7 +110,11 @@ class Corrective:
     sources: tuple[int, ...]
     """Columns of the 54 feature weights whose mean move drives it (one; both sides for an unsided shape)."""
     gain: float
-    """Weight per metre of that move: 1 over the shape's own move at the feature's landmarks (signed)."""
+    """Weight per metre of that move: 1 over the shape's own move at the feature's landmarks (signed; for an ``xy``
+    corrective, over the length of its move in the picture plane)."""
+    weights: tuple[float, ...] = ()
+    """Per source column, the weight per metre of that column's move (an ``xy`` corrective: the projection on the
+    shape's own move, ``m . s / |s|^2``); empty: :attr:`gain` shared equally by the sources."""
 
 
 def correctives(rig: Rig) -> tuple[Corrective, ...]:
@@ -116,10 +129,11 @@ def correctives(rig: Rig) -> tuple[Corrective, ...]:
     by_name = {t.name: t for t in rig.targets}
     out = []
     for spec in corrective_specs():
-        axis = AXES.index(spec.axis[1])
-        sign = 1.0 if spec.axis[0] == "+" else -1.0
+        plane = spec.axis == PICTURE_PLANE
+        axis = 1 if plane else AXES.index(spec.axis[1])
+        sign = 1.0 if plane or spec.axis[0] == "+" else -1.0
         feature_sides = _feature_sides(spec.feature) or ()
-        drivers = {s: by_name.get(f"fp_{spec.feature}{s}_{spec.axis[1]}") for s in feature_sides}
+        drivers = {s: by_name.get(f"fp_{spec.feature}{s}_{AXES[axis]}") for s in feature_sides}
         if spec.shape + "Left" in by_name and spec.shape + "Right" in by_name:
             pairs = [(spec.shape + s, (s,) if len(feature_sides) == 2 else feature_sides) for s in ("Left", "Right")]
         else:
@@ -130,6 +144,23 @@ def correctives(rig: Rig) -> tuple[Corrective, ...]:
                 continue
             plateau = np.concatenate([f.vertex_ids[f.deltas[:, axis] >= PLATEAU_SHARE] for f in fields if f])
             if plateau.size == 0:
+                continue
+            if plane:  # the shape's move in the picture plane: project the feature's move on it
+                own = _as_shipped(rig, by_name[shape])[plateau, :2].mean(axis=0)
+                length = float(np.linalg.norm(own))
+                if length < MIN_SHAPE_MOVE_M:
+                    continue
+                columns = [3 * FEATURE_NAMES.index(spec.feature + s) for s in sides]
+                per_side = own / length**2 / len(sides)
+                out.append(
+                    Corrective(
+                        CORRECTIVE_PREFIX + shape,
+                        shape,
+                        tuple(c + a for c in columns for a in (0, 1)),
+                        1.0 / length,
+                        tuple(float(per_side[a]) for _ in columns for a in (0, 1)),
+                    )
+                )
                 continue
             move = float(_as_shipped(rig, by_name[shape])[plateau, axis].mean())
             if sign * move < MIN_SHAPE_MOVE_M:
@@ -178,7 +209,7 @@ def corrective_targets(fp: FeaturePointRig, rig: Rig) -> tuple[MorphTarget, ...]
 
 def corrective_matrix(drives: tuple[Corrective, ...]) -> np.ndarray:
     """(54, k) float32: column ``j`` maps the 54 feature moves (metres) to corrective ``j``'s unclipped weight (the
-    mean of its source moves times its gain).
+    mean of its source moves times its gain, or the sum of each source move times its own weight).
 
     >>> c = Corrective("fpc_browInnerUp", "browInnerUp", (43, 46), 100.0)
     >>> m = corrective_matrix((c,)); m.shape, float(m[43, 0]), float(m[46, 0])
@@ -186,7 +217,10 @@ def corrective_matrix(drives: tuple[Corrective, ...]) -> np.ndarray:
     """
     matrix = np.zeros((3 * len(FEATURE_NAMES), len(drives)), np.float32)
     for j, corrective in enumerate(drives):
-        matrix[list(corrective.sources), j] = corrective.gain / len(corrective.sources)
+        if corrective.weights:
+            matrix[list(corrective.sources), j] = corrective.weights
+        else:
+            matrix[list(corrective.sources), j] = corrective.gain / len(corrective.sources)
     return matrix
 
 
