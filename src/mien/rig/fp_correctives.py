@@ -22,7 +22,7 @@ one (54, k) matrix once (:func:`corrective_matrix`), so a tick is one product an
 
 >>> spec = corrective_specs()[0]
 >>> spec.shape, spec.feature, spec.axis
-('mouthSmile', 'LipCorner', '+y')
+('mouthSmile', 'LipCorner', 'xy')
 """
 
 from __future__ import annotations
