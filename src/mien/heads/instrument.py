@@ -66,10 +66,10 @@ _OUTLINE_DEPTH = 1.2
 outer eye corners' distance: ICT-FaceKit's ear-level jaw points lie 1.06 of it behind."""
 _CLOSE_MARGINS = (0.12, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4)
 """Margins of the closer looks around the face first found, as fractions of its size. MediaPipe places a bare
-face's landmarks a little differently at each framing; seven looks rather than three (0.15, 0.25, 0.35) take
-the found iBUG-68 vertices of ICT written by Blender from 2.56 to 2.40 mm from ICT's own (median; eyes 1.99 to
-1.26), of ICT's identity b from 2.55 to 2.54 mm and of the built-in head from 6.05 to 5.44 mm. Three other sets
-of framings give the same picture (means 2.56 -> 2.40, 2.54 -> 2.38 and 5.37 -> 5.27 mm)."""
+face's landmarks a little differently at each framing; the medoid (:func:`_medoid`) of seven looks rather than
+the mean of three (0.15, 0.25, 0.35) takes the found iBUG-68 vertices of ICT written by Blender from 2.56 to
+2.54 mm from ICT's own (median; eyes 1.99 to 0.90), of ICT's identity b from 2.55 to 2.49 mm and of the built-in
+head from 6.05 to 5.34 mm. (Seven looks' mean: 2.40, 2.54 and 5.44 mm, but points off the surface.)"""
 _FOV_DEG = 20.0
 _SKIN_REACH = 0.15
 """How far behind a landmark ray's first hit its skin hit may lie to be taken instead, as a fraction of the
@@ -386,6 +386,14 @@ def _look(
     return points, int(hit[:478].sum())
 
 
+def _medoid(looks: np.ndarray) -> np.ndarray:
+    """(k, 3) of (n, k, 3) points found by n looks: for each point the look's that lies nearest the other looks'
+    (least summed distance). A found point stays a point on the surface: a mean of the looks' may lie inside it
+    (seven looks' mean put a VALID avatar's mouth corners 1 mm into the crease between the lips)."""
+    spread = np.linalg.norm(looks[:, None] - looks[None, :], axis=-1).sum(axis=1)  # (n, k)
+    return looks[np.argmin(spread, axis=0), np.arange(looks.shape[1])]
+
+
 def _skin_part(vertices: np.ndarray, parts: np.ndarray, points: np.ndarray) -> int:
     """The connected part (label of ``parts``) whose vertices are nearest most of ``points``: the skin."""
     nearest = np.argmin(np.linalg.norm(vertices[None, :, :] - points[:, None, :], axis=2), axis=1)
@@ -484,14 +492,14 @@ def instrument(
             if first is None:
                 continue
             # Closer looks, framed on the face found (a full body or a head with shoulders showed it small), at a
-            # few framings: the mean of their landmarks averages out MediaPipe's frame-to-frame jitter. Their rays
-            # land on the skin, not on lashes in front of it.
+            # few framings: the medoid of their landmarks sets MediaPipe's frame-to-frame jitter aside. Their rays land
+            # on the skin, not on lashes in front of it.
             skin = _skin_faces(vertices, faces, parts, first[0])
             boxes = [_face_box(first[0][:478], rotation, margin) for margin in _CLOSE_MARGINS]
             looks = [
                 found for box in boxes if (found := _look(landmarker, vertices, faces, rotation, box, drawing, skin))
             ] or [first]
-            points = np.mean([look[0] for look in looks], axis=0)
+            points = _medoid(np.stack([look[0] for look in looks]))
             found_view = view
             hits = min(look[1] for look in looks)
             break
