@@ -47,7 +47,7 @@ __all__ = [
     "instrument_cached",
 ]
 
-INSTRUMENT_VERSION = 7
+INSTRUMENT_VERSION = 8
 """Bumped when the method changes, so cached results of an older method are recomputed."""
 
 HUMAN_INTEROCULAR_M = 0.090
