@@ -25,7 +25,7 @@ from mien.rig.model import MorphTarget, Rig
 
 __all__ = ["MIN_FEATURE_MOVE_MM", "SYNTHESIS_VERSION", "missing_targets", "synthesize_cached", "synthesize_targets"]
 
-SYNTHESIS_VERSION = 1
+SYNTHESIS_VERSION = 2  # 2: the feature-point cheek bunches forward (rig 103b794)
 """Bumped when the method or the reference table changes, so cached shapes of an older method are remade."""
 
 MIN_FEATURE_MOVE_MM = 0.5
