@@ -341,8 +341,9 @@ def test_au_slider_laughter_and_clip_drive_the_face(open_page: Opener, tmp_path:
     back = page.settle()
     assert _change(neutral, back, mouth) < 1.0  # reset: every AU to 0 again
 
-    values = np.zeros((30, len(FACE_CHANNELS)))
-    values[:, FACE_CHANNELS.index("AU26")] = np.linspace(0.0, 5.0, 30)  # jaw drop over 1 s
+    # jaw drop over 1 s, then held 3 s: a loaded CI can take over a second per canvas read, and a 1 s clip was missed
+    values = np.zeros((120, len(FACE_CHANNELS)))
+    values[:, FACE_CHANNELS.index("AU26")] = np.minimum(np.linspace(0.0, 20.0, 120), 5.0)
     clip_path = tmp_path / "jaw.json"
     write(Clip(values, 30.0, FACE_CHANNELS), clip_path)
     page.page.set_input_files("#clip-file", str(clip_path))
@@ -352,7 +353,7 @@ def test_au_slider_laughter_and_clip_drive_the_face(open_page: Opener, tmp_path:
     assert "playing jaw.json" in page.page.locator("#status-message").inner_text()
     _save(page.canvas(), tmp_path / "clip.png")
 
-    after_clip = page.settle()  # the 1 s clip is over
+    after_clip = page.settle()
     page.page.click("button[data-laughter=laughter]")
     assert _wait_for_change(page, after_clip, mouth) > 3.0
     assert page.errors == []
