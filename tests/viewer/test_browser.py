@@ -349,7 +349,7 @@ def test_au_slider_laughter_and_clip_drive_the_face(open_page: Opener, tmp_path:
     page.page.set_input_files("#clip-file", str(clip_path))
     page.page.click("#clip-play")
     # the server reads an upload in a fresh worker process (mien.server.uploads): allow for its start on a busy CI
-    assert _wait_for_change(page, back, mouth, timeout_s=15.0) > 3.0
+    assert _wait_for_change(page, back, mouth, timeout_s=30.0) > 3.0
     assert "playing jaw.json" in page.page.locator("#status-message").inner_text()
     _save(page.canvas(), tmp_path / "clip.png")
 
