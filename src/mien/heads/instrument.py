@@ -203,7 +203,10 @@ def _cast(pixels: np.ndarray, faces: np.ndarray, targets: np.ndarray) -> tuple[n
     a, b, c = pixels[faces[:, 0]], pixels[faces[:, 1]], pixels[faces[:, 2]]
     low = np.minimum(np.minimum(a[:, :2], b[:, :2]), c[:, :2])
     high = np.maximum(np.maximum(a[:, :2], b[:, :2]), c[:, :2])
-    cell_of = lambda xy: np.floor(xy / _CELL_PX).astype(np.int64)  # noqa: E731
+
+    def cell_of(xy: np.ndarray) -> np.ndarray:
+        return np.floor(xy / _CELL_PX).astype(np.int64)
+
     target_cells = cell_of(targets)
     first, last = target_cells.min(axis=0), target_cells.max(axis=0)
     # triangles' cell ranges, clipped to the targets' cells (a triangle far off the picture files nowhere)

@@ -49,10 +49,10 @@ __all__ = [
 ]
 
 CORRECTIVE_PREFIX = "fpc_"
+"""Prefix of the compiled corrective targets: ``fpc_mouthSmileLeft``..."""
 PICTURE_PLANE = "xy"
 """The ``axis`` of a corrective driven by its feature's move in the picture plane (rig x and y) along the shape's own
 move there, not by one axis: the smile's corner goes up and out together (AU12 pulls it obliquely)."""
-"""Prefix of the compiled corrective targets: ``fpc_mouthSmileLeft``..."""
 PLATEAU_SHARE = 0.999
 """A feature target's vertices that move at least this share of the feature are its plateau."""
 MIN_SHAPE_MOVE_M = 1e-4
