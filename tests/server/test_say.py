@@ -30,11 +30,14 @@ sync_client = pytest.importorskip("websockets.sync.client")
 SENTENCE = "my mama made a map"
 BILABIALS = ("m", "p", "b")
 VOWELS = ("aI", "a", "a#", "eI")
+TAIL_TOLERANCE_S = 0.1  # how much longer espeak-ng may end the same sentence later in the process
 
 
 @pytest.fixture(scope="module")
 def spoken_offline():
-    """The sentence spoken offline (espeak-ng is deterministic: the server speaks the same)."""
+    """The sentence spoken offline. espeak-ng 1.51 keeps state between calls in one process (after some texts
+    its last phoneme runs ~40 ms longer, and neither re-initialising nor reseeding resets it), so the server's
+    utterance matches this one to within :data:`TAIL_TOLERANCE_S`, not to the sample."""
     try:
         return speech.speak(SENTENCE)
     except Exception as exc:  # MissingAssetError without libespeak-ng
@@ -74,7 +77,7 @@ def test_say_over_udp_moves_the_streamed_mouth_and_closes_it_on_bilabials(live, 
             client.say(SENTENCE, character="a")
         announcement, frames = _stream_until_silent(ws)
     assert announcement["character"] == "a" and announcement["text"] == SENTENCE
-    assert announcement["duration_s"] == pytest.approx(spoken_offline.duration_s)
+    assert announcement["duration_s"] == pytest.approx(spoken_offline.duration_s, abs=TAIL_TOLERANCE_S)
     times = np.array([f.time_s for f in frames])
     weights = np.array([f.weights for f in frames])
     start = announcement["start_s"]
@@ -123,7 +126,7 @@ def test_the_sound_is_served_as_the_wav_espeak_made(live, spoken_offline, wait_u
         assert file.getframerate() == spoken_offline.audio.sample_rate
         samples = np.frombuffer(file.readframes(file.getnframes()), "<i2") / 32767.0
     offline = spoken_offline.audio.samples
-    assert abs(len(samples) - len(offline)) <= 0.01 * len(offline)  # espeak-ng ends a call within a few samples
+    assert abs(len(samples) - len(offline)) <= TAIL_TOLERANCE_S * file.getframerate()  # the same, bar the tail
     served = energy_envelope(Audio(samples.astype(np.float32), file.getframerate()), fps=50.0)
     expected = energy_envelope(spoken_offline.audio, fps=50.0)
     n = min(len(served), len(expected))
