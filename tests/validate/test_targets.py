@@ -99,3 +99,24 @@ def test_recognition_json_carries_the_targets() -> None:
     builtin = rows[("builtin:a", "frontal joy")]
     assert builtin["met"] is True and builtin["rule"] == ">= 80%" and (builtin["hits"], builtin["n"]) == (8, 10)
     assert builtin["decided"] is False and 0.49 < builtin["interval95"][0] < 0.5
+
+
+def test_a_miss_shows_whether_the_facs_reading_shares_it() -> None:
+    # evil read neutral by the classifier in 3 of 4 frontal renders; the FACS reading finds joy or anger in 3 of them
+    # (a component: the miss is the classifier's alone) and sadness in the fourth; a neutral face has no FACS say
+    scores = [
+        *[_score("evil", "neutral" if k < 3 else "happy", "ict", facs_top=("joy", "anger", "joy", "sadness")[k])
+          for k in range(4)],
+        *[_score("neutral", "neutral", "ict") for _ in range(4)],
+    ]  # fmt: skip
+    checks = {(c.head, c.target.name): c for c in check_targets(RecognitionResult(tuple(scores), "fixed", {}))}
+    evil = checks[("ict:a", "blend evil (top label a component)")]
+    assert (evil.hits, evil.n, evil.second) == (1, 4, (3, 4))
+    assert "blend evil (top label a component) 25% (1 of 4; 95% interval 5-70%; FACS reading 3 of 4; >= 90%)" in (
+        "\n".join(scorecard_lines(tuple(checks.values())))
+    )
+    assert checks[("ict:a", "neutral reads neutral")].second == (0, 0)  # no say: nothing printed
+    row = next(
+        r for r in RecognitionResult(tuple(scores), "fixed", {}).to_json()["targets"] if r["target"] == evil.target.name
+    )
+    assert row["facs_reading"] == {"hits": 3, "n": 4}

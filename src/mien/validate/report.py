@@ -175,7 +175,8 @@ def _targets_table(result: RecognitionResult) -> str:
         low, high = check.interval
         noise = "" if check.decided else ", within noise"
         crops = "" if check.spread[0] != check.spread[0] else f"; crops {_pct(check.spread[0])}-{_pct(check.spread[1])}"
-        spread = f"{check.n} renders; {_pct(low)}-{_pct(high)}{noise}{crops}"
+        second = f"; FACS reading {check.second[0]} of {check.second[1]}" if check.second[1] else ""
+        spread = f"{check.n} renders; {_pct(low)}-{_pct(high)}{noise}{crops}{second}"
         return f"{_pct(check.value)}{marks[check.met]} <small>({spread})</small>"
 
     rows = [
@@ -186,9 +187,10 @@ def _targets_table(result: RecognitionResult) -> str:
     return (
         "<h3>Targets per head</h3><p>&#10003; met, &#10007; missed, over the renders of this report; in "
         "brackets the renders judged, the share's 95% Wilson interval (within noise: the interval reaches the "
-        "bound, too few renders to tell) and its spread across crops. Realistic heads (ICT-FaceKit, a user's "
-        "character) are held to the issue's targets; the built-in head, stylised, to its own lower bars "
-        "(mien.validate.targets).</p>" + _table(["target", "rule", *heads], rows)
+        "bound, too few renders to tell), its spread across crops and, for an emotion or a blend, how many of the "
+        "same renders the FACS reading (the second judge) reads as it or one of its components. Realistic heads "
+        "(ICT-FaceKit, a user's character) are held to the issue's targets; the built-in head, stylised, to its own "
+        "lower bars (mien.validate.targets).</p>" + _table(["target", "rule", *heads], rows)
     )
 
 

@@ -305,6 +305,7 @@ class RecognitionResult:
                     "met": c.met,
                     "spread": list(c.spread),
                     "decided": c.decided,
+                    "facs_reading": {"hits": c.second[0], "n": c.second[1]} if c.second[1] else None,
                 }
                 for c in check_targets(self)
             ],
