@@ -47,7 +47,7 @@ __all__ = [
     "instrument_cached",
 ]
 
-INSTRUMENT_VERSION = 8
+INSTRUMENT_VERSION = 9
 """Bumped when the method changes, so cached results of an older method are recomputed."""
 
 HUMAN_INTEROCULAR_M = 0.090
@@ -397,6 +397,48 @@ def _medoid(looks: np.ndarray) -> np.ndarray:
     return looks[np.argmin(spread, axis=0), np.arange(looks.shape[1])]
 
 
+_INNER_LIPS: tuple[tuple[int, int], ...] = ((61, 67), (62, 66), (63, 65))
+"""The iBUG inner-lip pairs that face each other across the mouth slit: (upper lip point, lower lip point)."""
+_SEAM_REACH = 0.1
+"""Radius of the skin looked at around a closed mouth's seam, as a share of the inter-ocular distance (9 mm on an
+adult face: both lips, and not the nose or the chin)."""
+
+
+def _lip_sides(
+    vertices: np.ndarray, faces: np.ndarray, skin: np.ndarray, points68: np.ndarray, ids: np.ndarray, up: np.ndarray
+) -> None:
+    """Put each inner-lip landmark vertex of ``ids`` (68,) on its own lip, in place.
+
+    A mouth modelled closed (every VALID avatar) has its lips meeting: MediaPipe puts the upper and lower inner-lip
+    points on the same spot of the picture, and the nearest vertex to both is one vertex of one lip. The
+    feature-point rig then moves that vertex with both lips, and an opening jaw stretches the lips shut into a
+    balloon instead of parting them. Around the seam (within :data:`_SEAM_REACH` of the face's size) the skin
+    falls into pieces joined by no triangle: the upper lip, the lower lip. When a pair's two vertices lie on one
+    piece, the upper point takes the nearest vertex of the nearest piece above the seam (along ``up``) and the
+    lower point that of the nearest piece below. A mouth modelled open (ICT-FaceKit) already has its points on
+    two pieces and is left as it is; so is one whose lips are welded into one piece (nothing parts them).
+    """
+    reach = _SEAM_REACH * float(np.linalg.norm(points68[45] - points68[36]))
+    for upper, lower in _INNER_LIPS:
+        seam = (points68[upper] + points68[lower]) / 2
+        distance = np.linalg.norm(vertices - seam, axis=1)
+        near = skin & (distance < reach)
+        pieces = vertex_components(len(vertices), faces[near[faces].all(axis=1)])
+        if not (near[ids[upper]] and near[ids[lower]]) or pieces[ids[upper]] != pieces[ids[lower]]:
+            continue
+        sides: dict[bool, int] = {}
+        for piece in np.unique(pieces[near]):
+            members = np.flatnonzero(near & (pieces == piece))
+            if len(members) < 3:
+                continue
+            above = bool((vertices[members] - seam).mean(axis=0) @ up > 0)
+            nearest = int(members[np.argmin(distance[members])])
+            if above not in sides or distance[nearest] < distance[sides[above]]:
+                sides[above] = nearest
+        if len(sides) == 2:
+            ids[upper], ids[lower] = sides[True], sides[False]
+
+
 def _skin_part(vertices: np.ndarray, parts: np.ndarray, points: np.ndarray) -> int:
     """The connected part (label of ``parts``) whose vertices are nearest most of ``points``: the skin."""
     nearest = np.argmin(np.linalg.norm(vertices[None, :, :] - points[:, None, :], axis=2), axis=1)
@@ -526,13 +568,16 @@ def instrument(
         raise InvalidValueError(f"{name} axes", found_view, "a face whose up and forward axes can be told apart")
     # Landmark vertices on the skin (not an eyeball or a tooth that a ray met first), so paths between landmarks
     # (the feature-point rig's geodesics) stay on one surface.
-    skin = np.flatnonzero(parts == _skin_part(vertices, parts, points68))
+    on_skin = parts == _skin_part(vertices, parts, points68)
+    skin = np.flatnonzero(on_skin)
     distances = np.full((68, len(vertices)), np.inf)
     distances[:, skin] = np.linalg.norm(vertices[None, skin, :] - points68[:, None, :], axis=2)
+    ids = np.argmin(distances, axis=1)
+    _lip_sides(vertices, faces, on_skin, points68, ids, up_measured / np.linalg.norm(up_measured))
     return Instrumentation(
         landmarks478=points.astype(np.float32),
         ibug68_points=points68.astype(np.float32),
-        ibug68_vertices=np.argmin(distances, axis=1).astype(np.int32),
+        ibug68_vertices=ids.astype(np.int32),
         interocular=interocular,
         unit=unit,
         up=tuple(float(v) for v in up),  # type: ignore[arg-type]
