@@ -5,6 +5,8 @@ spellings are hidden from ``--help``; every command with progress has ``--quiet`
 from __future__ import annotations
 
 import argparse
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -169,3 +171,30 @@ def test_one_fps_policy(d: Path) -> None:
         assert parsed(argv, d)[0]["fps"] == ANIMATION_FPS == 60.0, argv
     assert parsed("demo", d)[0]["fps"] == VIDEO_FPS == 30.0
     assert f"default {VIDEO_FPS:g}" in _help("render")
+
+
+def test_a_library_warning_reads_as_one_line_of_the_command() -> None:
+    """A warning raised inside a command (a user's head lacking mouthClose, say) is printed as the commands' own
+    warnings are: ``mien CMD: warning: MESSAGE``, no source path, no code line; the format is put back after. Run in a
+    fresh interpreter, as a user's is (pytest records warnings instead of printing them)."""
+    program = """
+import sys, warnings
+from mien.cli import main
+from mien.commands import emote
+
+def warns(args):
+    message = "rig 'Hispanic_M_1_Casual' lacks targets mouthClose\\nthe AUs driving them lose that motion"
+    warnings.warn(message, UserWarning, stacklevel=2)
+    return 0
+
+emote.run = warns
+before = warnings.formatwarning
+code = main(["emote", "joy"])
+sys.exit(code if warnings.formatwarning is before else 3)
+"""
+    done = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stderr == (
+        "mien emote: warning: rig 'Hispanic_M_1_Casual' lacks targets mouthClose; "
+        "the AUs driving them lose that motion\n"
+    )

@@ -6,7 +6,8 @@ import argparse
 import importlib
 import os
 import sys
-from collections.abc import Sequence
+import warnings
+from collections.abc import Callable, Sequence
 from typing import NoReturn
 
 from mien.commands import COMMAND_MODULES
@@ -59,6 +60,20 @@ def _one_line(message: object) -> str:
     return "; ".join(line.strip() for line in str(message).splitlines() if line.strip())
 
 
+def _warning_line(command: str) -> Callable[..., str]:
+    """A :func:`warnings.formatwarning` that writes ``mien COMMAND: warning: MESSAGE`` on one line: what a library
+    warns of while a command runs (a head that lacks a shape, a texture it cannot decode) reads as the commands'
+    own warnings do, with no source path or code line. Recorded warnings (``catch_warnings(record=True)``) are not
+    formatted, so a caller that collects them still gets them whole."""
+
+    def line(
+        message: Warning | str, category: type[Warning], filename: str, lineno: int, text: str | None = None
+    ) -> str:
+        return f"mien {command}: warning: {_one_line(message)}\n"
+
+    return line
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run ``mien`` with ``argv`` (default: ``sys.argv[1:]``) and return the exit code."""
     parser = build_parser()
@@ -78,6 +93,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     if getattr(args, "handler", None) is None:
         parser.print_help()
         return 0
+    formatwarning = warnings.formatwarning
+    warnings.formatwarning = _warning_line(args.command)
     try:
         prepare_outputs()  # the missing output folders, made once every argument is known to be good
         with termination_as_interrupt():  # SIGTERM / SIGHUP clean up as Ctrl-C does, in every command
@@ -107,6 +124,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+    finally:
+        warnings.formatwarning = formatwarning
 
 
 if __name__ == "__main__":
