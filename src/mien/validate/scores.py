@@ -102,6 +102,14 @@ class StimulusScore:
             return None
         return self._judged(framing, reading, both=True)
 
+    def facs_agrees(self, read_as: str | None = None) -> bool | None:
+        """Is the FACS reading (:attr:`facs_top`) ``read_as`` (default: this face's own expression; a blend: one of its
+        components)? None when the face has no FACS reading (a neutral face, a profile, nothing detected)."""
+        if self.facs_top is None:
+            return None
+        name = self.stimulus.expression
+        return self.facs_top in ((read_as,) if read_as is not None else (blend_components(name) or (name,)))
+
     def _top_two(self, framing: str | None, reading: str | None) -> tuple[str, str] | None:
         """The two top labels of :meth:`probabilities` (None when not measured), worked out once per judge: a
         scorecard asks each score about every reading of every target."""
@@ -228,13 +236,7 @@ class RecognitionResult:
     def facs_rate(self, read_as: str | None = None, **conditions: Any) -> float:
         """Share of matching stimuli whose FACS reading is ``read_as`` (default: each one's own expression; a
         blend counts when the reading is one of its components); nan when none has a reading."""
-        judged = []
-        for score in self.subset(**conditions):
-            if score.facs_top is None:
-                continue
-            name = score.stimulus.expression
-            wanted = {read_as} if read_as is not None else set(blend_components(name) or (name,))
-            judged.append(score.facs_top in wanted)
+        judged = [agrees for s in self.subset(**conditions) if (agrees := s.facs_agrees(read_as)) is not None]
         return float(np.mean(judged)) if judged else float("nan")
 
     def quality(self, expression: str, **conditions: Any) -> float:

@@ -115,19 +115,14 @@ def _both_components(**fixed: Any) -> Callable[..., list[bool]]:
 
 def _read_by_facs(**fixed: Any) -> Callable[..., list[bool]]:
     def outcomes(result: Any, **conditions: Any) -> list[bool]:
-        judged = []
-        for score in result.subset(**fixed, **conditions):
-            if score.facs_top is not None:
-                name = score.stimulus.expression
-                judged.append(score.facs_top in (blend_components(name) or (name,)))
-        return judged
+        return [agrees for s in result.subset(**fixed, **conditions) if (agrees := s.facs_agrees()) is not None]
 
     return outcomes
 
 
 def _disgust_as_anger(result: Any, reading: str | None = None, **conditions: Any) -> list[bool]:
     scores = result.subset(expression="disgust", **conditions)
-    return [s.facs_top == "anger" for s in scores if s.facs_top is not None]
+    return [agrees for s in scores if (agrees := s.facs_agrees("anger")) is not None]
 
 
 def _targets(five: float, oblique: float | None, neutral: float, blends: float | None) -> tuple[Target, ...]:
