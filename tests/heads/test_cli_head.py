@@ -42,6 +42,7 @@ def test_inspect_a_valid_avatar(tmp_path: Path, landmarker_path: Path, capsys: p
     assert "synthesized (7, the reference head's moves through the feature-point fields):" in out
     assert "mouthStretchLeft" in out and "no mouthStretchLeft" not in out
     assert "landmarks: 68 iBUG points found on the head's render (seen from +z/+y" in out
+    assert "mouth: modelled closed; 3 of 3 inner-lip pairs put one point on each lip" in out
     assert "file frame: unit m, up +y, forward +z" in out
     assert "driven harder, as far as the reference head" in out
     assert picture.stat().st_size > 10_000

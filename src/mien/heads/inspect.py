@@ -70,6 +70,11 @@ class HeadInspection:
                 f"landmarks: 68 iBUG points found on the head's render (seen from {found.view}, "
                 f"{found.hits} of 478 MediaPipe rays hit the mesh)"
             )
+            if found.lips_apart:
+                lines.append(
+                    f"mouth: modelled closed; {found.lips_apart} of 3 inner-lip pairs put one point on each lip, so "
+                    "the jaw parts the lips"
+                )
             lines.append(
                 f"file frame: unit {found.unit}, up {_axis(found.up)}, forward {_axis(found.forward)} "
                 f"(the face leans {found.tilt_deg:.1f} degrees from that up)"

@@ -113,6 +113,8 @@ class Instrumentation:
     """How many of the 478 landmark rays hit the mesh (the rest are taken from their neighbours)."""
     view: str
     """The viewing direction that found the face, ``"forward/up"`` (e.g. ``"+z/+y"``)."""
+    lips_apart: int = 0
+    """How many inner-lip pairs of a mouth modelled closed were put on their own lips (0..3; :func:`_lip_sides`)."""
 
     @property
     def metres_per_unit(self) -> float:
@@ -149,6 +151,7 @@ class Instrumentation:
                 tilt_deg=float(data["tilt_deg"]),
                 hits=int(data["hits"]),
                 view=str(data["view"]),
+                lips_apart=int(data["lips_apart"]),
             )
         except (KeyError, TypeError, ValueError) as error:
             if isinstance(error, InvalidValueError):
@@ -406,8 +409,8 @@ adult face: both lips, and not the nose or the chin)."""
 
 def _lip_sides(
     vertices: np.ndarray, faces: np.ndarray, skin: np.ndarray, points68: np.ndarray, ids: np.ndarray, up: np.ndarray
-) -> None:
-    """Put each inner-lip landmark vertex of ``ids`` (68,) on its own lip, in place.
+) -> int:
+    """Put each inner-lip landmark vertex of ``ids`` (68,) on its own lip, in place; returns how many pairs moved.
 
     A mouth modelled closed (every VALID avatar) has its lips meeting: MediaPipe puts the upper and lower inner-lip
     points on the same spot of the picture, and the nearest vertex to both is one vertex of one lip. The
@@ -419,6 +422,7 @@ def _lip_sides(
     two pieces and is left as it is; so is one whose lips are welded into one piece (nothing parts them).
     """
     reach = _SEAM_REACH * float(np.linalg.norm(points68[45] - points68[36]))
+    moved = 0
     for upper, lower in _INNER_LIPS:
         seam = (points68[upper] + points68[lower]) / 2
         distance = np.linalg.norm(vertices - seam, axis=1)
@@ -437,6 +441,8 @@ def _lip_sides(
                 sides[above] = nearest
         if len(sides) == 2:
             ids[upper], ids[lower] = sides[True], sides[False]
+            moved += 1
+    return moved
 
 
 def _skin_part(vertices: np.ndarray, parts: np.ndarray, points: np.ndarray) -> int:
@@ -573,7 +579,7 @@ def instrument(
     distances = np.full((68, len(vertices)), np.inf)
     distances[:, skin] = np.linalg.norm(vertices[None, skin, :] - points68[:, None, :], axis=2)
     ids = np.argmin(distances, axis=1)
-    _lip_sides(vertices, faces, on_skin, points68, ids, up_measured / np.linalg.norm(up_measured))
+    lips_apart = _lip_sides(vertices, faces, on_skin, points68, ids, up_measured / np.linalg.norm(up_measured))
     return Instrumentation(
         landmarks478=points.astype(np.float32),
         ibug68_points=points68.astype(np.float32),
@@ -585,6 +591,7 @@ def instrument(
         tilt_deg=round(tilt, 2),
         hits=hits,
         view=found_view,
+        lips_apart=lips_apart,
     )
 
 
