@@ -71,8 +71,25 @@ def test_timid_shapes_are_driven_as_far_as_the_reference(valid_heads: dict[str, 
                 assert weight == pytest.approx(raw_weight * gain)
 
 
-def test_the_feature_point_basis_compiles_on_a_valid_avatar() -> None:
-    rig = load_head(str(_valid()[0]), feature_points=True)
+@pytest.fixture(scope="module")
+def valid_fp() -> FileRig:
+    """The first VALID avatar (Asian_F_1) with the feature-point rig compiled."""
+    return load_head(str(_valid()[0]), feature_points=True)  # type: ignore[return-value]
+
+
+def _expression(rig: FileRig, expression: str, intensity: float) -> np.ndarray:
+    """(n, 3) the rig's vertices at the peak of ``expression`` on the feature-point basis, as a render shows it."""
+    from mien.rig.animate import face_to_rig
+    from mien.rig.deform import Deformer
+    from mien.validate.recognition import peak_face
+
+    frame, features = peak_face(expression, intensity, "feature_points")
+    weights, _ = face_to_rig(rig, frame[None], None if features is None else features[None])
+    return Deformer(rig).deform(weights[0].astype(np.float32)).copy()
+
+
+def test_the_feature_point_basis_compiles_on_a_valid_avatar(valid_fp: FileRig) -> None:
+    rig = valid_fp
     fp = [t for t in rig.targets if t.name.startswith("fp_")]
     assert len(fp) == 54
     for target in fp:  # a unit field: its anchor follows the feature one for one, nothing flies off
@@ -97,22 +114,27 @@ def test_each_inner_lip_point_of_a_closed_mouth_sits_on_its_own_lip(valid_heads:
 
 
 @pytest.mark.filterwarnings("ignore:AU mapping.*lacks targets mouthClose")  # VALID has no mouthClose; unused here
-def test_the_feature_point_jaw_parts_the_lips_of_a_closed_mouth() -> None:
+def test_the_feature_point_jaw_parts_the_lips_of_a_closed_mouth(valid_fp: FileRig) -> None:
     """Table 1's surprise drops the jaw 24 mm at 2.4: the lips part by about that (measured 26-30 mm on the four
     avatars, 0 before the lips' points were told apart: the jaw stretched the closed lips into a balloon)."""
-    from mien.rig.animate import face_to_rig
-    from mien.rig.deform import Deformer
-    from mien.validate.recognition import peak_face
-
-    rig = load_head(str(_valid()[0]), feature_points=True)
-    inner = rig.landmarks[[61, 62, 63]], rig.landmarks[[67, 66, 65]]
+    inner = valid_fp.landmarks[[61, 62, 63]], valid_fp.landmarks[[67, 66, 65]]
     gaps = {}
     for expression in ("neutral", "surprise"):
-        frame, features = peak_face(expression, 2.4, "feature_points")
-        weights, _ = face_to_rig(rig, frame[None], None if features is None else features[None])
-        moved = Deformer(rig).deform(weights[0].astype(np.float32))
+        moved = _expression(valid_fp, expression, 2.4)
         gaps[expression] = np.linalg.norm(moved[inner[0]] - moved[inner[1]], axis=1) * 1000
     assert (gaps["surprise"] - gaps["neutral"] > 18.0).all(), gaps
+
+
+@pytest.mark.filterwarnings("ignore:AU mapping.*lacks targets mouthClose")
+def test_a_closed_mouths_expressions_fold_few_skin_triangles(valid_fp: FileRig) -> None:
+    """Issue 31's bar for ICT (at most 50 folded triangles per expression at 2.4) holds on a user's closed-mouth
+    avatar too: measured at most 16 on Asian_F_1 (enthusiastic), 336 before its lips' points were told apart."""
+    from mien.rig.mesh_quality import flipped_triangles
+    from mien.validate.expressions import EXPRESSIONS
+
+    for expression in EXPRESSIONS:
+        folded = flipped_triangles(valid_fp, _expression(valid_fp, expression, 2.4)).size
+        assert folded <= 50, (expression, folded)
 
 
 def test_the_second_load_is_answered_by_the_cache(monkeypatch: pytest.MonkeyPatch) -> None:
