@@ -141,3 +141,19 @@ def test_between_subject_factor(tmp_path: Path) -> None:
         assert len(identities) == 1 and len(plan.sequence) == 160
         seen.append(identities.pop())
     assert seen == ["", "b", "", "b"]
+
+
+def test_a_users_character_file_is_a_head(tmp_path: Path) -> None:
+    """A design names a character file as it names supplied videos: relative to the design file, or with file:."""
+    (tmp_path / "avatars").mkdir()
+    (tmp_path / "avatars" / "me.glb").write_bytes(b"glTF")  # read when the stimuli are rendered, not here
+    text = FULL.replace('heads = ["default"]', 'heads = ["avatars/me.glb", "file:avatars/me.glb", "builtin:b"]')
+    design = load_design(write(tmp_path, text))
+    heads = {(s.conditions["head"], s.conditions["identity"]) for s in design.stimuli}
+    assert heads == {("file", str((tmp_path / "avatars" / "me.glb").resolve())), ("builtin", "b")}
+    for missing in ("avatars/you.glb", "file:avatars/you.glb", "avatars/"):
+        path = write(tmp_path, FULL.replace('heads = ["default"]', f'heads = ["{missing}"]'))
+        with pytest.raises(InvalidValueError) as caught:
+            load_design(path)
+        message = str(caught.value)
+        assert "stimuli.heads" in message and missing in message and "relative to the design file" in message

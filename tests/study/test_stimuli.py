@@ -143,3 +143,24 @@ def _tiny(folder: Path) -> Path:
     path = folder / "design.toml"
     path.write_text(TINY.replace('views = ["frontal", "lateral"]', 'views = ["frontal"]'))
     return path
+
+
+@pytest.mark.filterwarnings("ignore:AU mapping.*lacks targets mouthClose")  # the VALID avatars have no mouthClose
+def test_stimuli_render_on_a_users_character(tmp_path: Path) -> None:
+    """A perception study on the user's own character: the design names the file, the stimuli are drawn with its
+    textures, and the manifest records the file and its hash (a changed file renders them again)."""
+    from tests.conftest import valid_avatar
+
+    avatar = valid_avatar("Black_M_1_Casual.glb")
+    (tmp_path / "me.glb").symlink_to(avatar)
+    design_path = tmp_path / "design.toml"
+    design_path.write_text(TINY.replace('heads = ["builtin"]', 'heads = ["me.glb"]').replace(', "lateral"', ""))
+    result = make_stimuli(load_design(design_path), progress=False)
+    assert (result.rendered, result.skipped) == (2, 0)
+    for entry in result.manifest["stimuli"]:
+        assert entry["conditions"]["head"] == "file"
+        assert entry["rendered_head"] == {
+            "head": "file", "identity": str(avatar.resolve()), "asset_sha256": file_sha256(avatar)
+        }  # fmt: skip
+        info = read_video_info(tmp_path / "stimuli" / entry["file"])
+        assert (info.width, info.height, info.n_frames) == (64, 64, 8)

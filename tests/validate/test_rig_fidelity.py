@@ -110,3 +110,18 @@ def test_small_real_run_on_the_builtin_head(landmarker_path: Path, shared_data: 
     data = json.loads(paths["rig_fidelity"].read_text("utf-8"))
     assert data["heads"][0]["per_au"]["AU12"]["strongest"] is True
     assert RigFidelity.read(paths["rig_fidelity"]).to_dict() == data
+
+
+def test_a_users_head_file_gets_its_rig_measured(landmarker_path: Path, tmp_path: Path) -> None:
+    """`mien validate rig` and `report` take a character file (the head its path, as `load_head` does): AU12 on a
+    VALID avatar, whose Rocketbox smile the calibration drives as far as ICT's, reads back as AU12."""
+    from tests.conftest import valid_avatar
+
+    path = valid_avatar("White_F_1_Casual.glb")
+    with pytest.warns(UserWarning, match="lacks targets mouthClose"):
+        result = run_rig_fidelity([("file", str(path))], aus=[12], intensities=(2, 5), progress=False)
+    head = result.heads[0]
+    assert head.label == "White_F_1_Casual.glb"
+    assert head.strongest[0] and head.r[0] > 0.9, (head.r, head.slope)
+    written = result.write(tmp_path / "rig")
+    assert (tmp_path / "rig" / "white_f_1_casual_glb_scatter.png").is_file(), sorted(p.name for p in written.values())

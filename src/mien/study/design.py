@@ -12,7 +12,8 @@ and the key, so ``mien study ...`` answers exit 2 with a message instead of a tr
     source = "render"            # or "files" with [[stimuli.file]] entries
     expressions = ["joy", "sadness", "anger", "fear", "surprise", "disgust",
                    "evil", "furious", "enthusiastic", "frustrated"]
-    heads = ["default"]          # "default", "builtin", "ict", with an identity: "ict:a", "builtin:b"
+    heads = ["default"]          # "default", "builtin", "ict", with an identity: "ict:a", "builtin:b", or your
+                                 #   character file, relative to this file: "avatars/me.glb"
     bases = ["facs", "feature_points"]
     views = ["frontal", "lateral"]
     distances_m = [1.0, 3.0]
@@ -46,6 +47,7 @@ from mien.affect.emotions import MAX_INTENSITY, STUDY_EXPRESSIONS, known_names, 
 from mien.errors import InvalidValueError, MienError, MissingAssetError, UnknownNameError
 from mien.laughter.taxonomy import LAUGH_TYPES, TAXONOMY
 from mien.render.camera import STUDY_ANGLES
+from mien.rig.files.head import FILE_SUFFIXES, is_head_file
 from mien.rig.heads import HEADS
 
 __all__ = [
@@ -332,13 +334,26 @@ def _say(path: Path, value: Any) -> SpokenLine | None:
 
 
 def _head(path: Path, spec: str) -> tuple[str, str]:
-    """``"ict:a"`` -> ("ict", "a"); ``"default"`` -> ("default", ""). Checks the head name only (identities
-    are checked when a head is loaded, which needs its assets)."""
+    """``"ict:a"`` -> ("ict", "a"); ``"default"`` -> ("default", ""); a character file (``"me.glb"`` or
+    ``"file:me.glb"``, relative to the design file, as supplied videos are) -> ("file", its absolute path). Checks
+    the head name and that a file exists (identities are checked when a head is loaded, which needs its assets)."""
 
     name, _, identity = spec.partition(":")
-    if name not in HEADS:
-        raise UnknownNameError(f"head in {path} stimuli.heads", spec, HEADS)
-    return name, identity
+    if name in HEADS:
+        return name, identity
+    file = spec[len("file:") :] if name == "file" else spec
+    full = (path.parent / file).resolve()
+    if is_head_file(full):
+        return "file", str(full)
+    if name == "file" or Path(file).suffix.lower() in FILE_SUFFIXES or "/" in file:
+        raise _fail(
+            path,
+            "stimuli.heads",
+            spec,
+            f"a character file that exists: {full} is not a {', '.join(FILE_SUFFIXES)} file or a folder of OBJ shapes "
+            "(paths are relative to the design file)",
+        )
+    raise UnknownNameError(f"head in {path} stimuli.heads", spec, HEADS)
 
 
 def _conditions(path: Path, key: str, value: Any, protocol: str) -> dict[str, Any]:

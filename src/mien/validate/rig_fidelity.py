@@ -73,7 +73,7 @@ from mien.render.camera import camera_from_options
 from mien.render.contact_sheet import contact_sheet
 from mien.render.video import write_png
 from mien.rig.au_solve import AUSolver
-from mien.rig.heads import HEADS, ict_installed
+from mien.rig.heads import HEADS, head_label, ict_installed
 from mien.validate.face_detector import MediaPipeDetector
 from mien.validate.figures import plot_crosstalk, plot_scatter
 from mien.validate.human_evidence import HumanEvidence, default_human_folder, human_evidence
@@ -260,8 +260,8 @@ class HeadFidelity:
 
     @property
     def label(self) -> str:
-        """``head`` or ``head:identity``."""
-        return self.head if self.identity is None else f"{self.head}:{self.identity}"
+        """``head`` or ``head:identity``; a head file's name (:func:`mien.rig.heads.head_label`)."""
+        return head_label(self.head, self.identity)
 
     def leaks(self, threshold: float = 0.2) -> list[list[tuple[int, float]]]:
         """Per commanded AU, the other detected AUs with a cross-talk slope >= ``threshold``, largest first."""
@@ -506,7 +506,8 @@ def run_rig_fidelity(
 ) -> RigFidelity:
     """Command each AU alone on each head, render, detect, and compare (module docstring).
 
-    heads: ``(head, identity)`` pairs (:func:`mien.heads.load_head`; identity None = the head's default).
+    heads: ``(head, identity)`` pairs (:func:`mien.heads.load_head`; identity None = the head's default;
+    ``("file", path)``: a user's head file).
     aus: AU numbers or names (default the 18 OpenFACS AUs). intensities: commanded levels in (0, 5].
     camera: a :data:`~mien.render.camera.CAMERA_PRESETS` name. size: render (width, height) pixels.
     detector: a :class:`~mien.validate.detector.Detector` giving blendshapes (default MediaPipe in image mode;
@@ -528,7 +529,7 @@ def run_rig_fidelity(
     if not heads:
         raise InvalidValueError("heads", heads, "at least one (head, identity) pair")
     for name, _ in heads:
-        if name not in HEADS:
+        if name not in HEADS and name != "file":  # "file": a user's head file, its path the identity
             raise UnknownNameError("head", name, HEADS)
         if name == "ict" and not ict_installed():
             raise MissingAssetError(
@@ -591,7 +592,8 @@ def _run_head(
     scores = np.full((len(jobs), n_blend), np.nan)
     crops: dict[int, np.ndarray] = {}
     with StimulusRenderer(rig, view, (int(size[0]), int(size[1]))) as renderer:
-        for k, (i, level) in enumerate(progress_bar(jobs, len(jobs), f"rig fidelity {name}", show_progress)):
+        label = f"rig fidelity {head_label(name, identity)}"
+        for k, (i, level) in enumerate(progress_bar(jobs, len(jobs), label, show_progress)):
             frame = np.zeros(len(FACE_CHANNELS))
             if i >= 0:
                 frame[list(au_channels(commanded[i]))] = level
