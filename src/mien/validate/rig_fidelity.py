@@ -73,7 +73,7 @@ from mien.render.camera import camera_from_options
 from mien.render.contact_sheet import contact_sheet
 from mien.render.video import write_png
 from mien.rig.au_solve import AUSolver
-from mien.rig.heads import HEADS, head_label, ict_installed
+from mien.rig.heads import head_label, ict_installed, resolve_head_name
 from mien.validate.face_detector import MediaPipeDetector
 from mien.validate.figures import plot_crosstalk, plot_scatter
 from mien.validate.human_evidence import HumanEvidence, default_human_folder, human_evidence
@@ -529,8 +529,7 @@ def run_rig_fidelity(
     if not heads:
         raise InvalidValueError("heads", heads, "at least one (head, identity) pair")
     for name, _ in heads:
-        if name not in HEADS and name != "file":  # "file": a user's head file, its path the identity
-            raise UnknownNameError("head", name, HEADS)
+        resolve_head_name(name)  # the named heads and "file" (a user's head file, its path the identity)
         if name == "ict" and not ict_installed():
             raise MissingAssetError(
                 "ICT-FaceKit is not installed: set MIEN_ICT_FACEKIT to the ICT-FaceKit folder (holds FaceXModel/)"
